@@ -1,0 +1,125 @@
+"""The physics layer shared by the tops: one rigid body turning about a fixed point (its CM or a pivot).
+
+Turns MuJoCo's raw state rows into named physical quantities with their frames in their names
+(house rule 6). Works on a whole trajectory at once (vectorised over time) or on a single state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+
+from rigidbench import frames
+from rigidbench.envs.base import ScenarioEnv
+
+
+@dataclass(frozen=True)
+class RotorMotion:
+    """Orientation and angular velocity of one body over time.
+
+    Attributes
+    ----------
+    time : ndarray, shape (n,)
+    quat_WB : ndarray, shape (n, 4)
+        Body-to-world quaternion (w, x, y, z).
+    omega_B : ndarray, shape (n, 3)
+        Angular velocity in the body frame (rad/s): MuJoCo's qvel for free and ball joints.
+    inertia_B : ndarray, shape (3,)
+        Principal moments (kg m^2) about the point the body turns about (CM for a free body, pivot for a
+        pivoted one), in body axes.
+    """
+
+    time: np.ndarray
+    quat_WB: np.ndarray
+    omega_B: np.ndarray
+    inertia_B: np.ndarray
+
+    @cached_property
+    def R_WB(self) -> np.ndarray:
+        return frames.quat_to_matrix(self.quat_WB)
+
+    @cached_property
+    def omega_W(self) -> np.ndarray:
+        return frames.body_to_world(self.R_WB, self.omega_B)
+
+    @cached_property
+    def L_B(self) -> np.ndarray:
+        """Angular momentum about the reference point, body frame (kg m^2/s)."""
+        return self.inertia_B * self.omega_B
+
+    @cached_property
+    def L_W(self) -> np.ndarray:
+        """Angular momentum about the reference point, world frame (kg m^2/s)."""
+        return frames.body_to_world(self.R_WB, self.L_B)
+
+    @cached_property
+    def e3_W(self) -> np.ndarray:
+        """Body axis 3 (the symmetry axis of a symmetric top) in the world frame."""
+        return self.R_WB[..., :, 2]
+
+    @cached_property
+    def kinetic_energy(self) -> np.ndarray:
+        """Rotational kinetic energy about the reference point (J)."""
+        return 0.5 * np.sum(self.inertia_B * self.omega_B**2, axis=-1)
+
+
+def free_body_motion(model: mujoco.MjModel, time: np.ndarray, qpos: np.ndarray, qvel: np.ndarray) -> RotorMotion:
+    """Motion of the single free body of `model` about its CM (qpos = [x, q], qvel = [v_W, omega_B])."""
+    return RotorMotion(
+        time=time, quat_WB=qpos[..., 3:7], omega_B=qvel[..., 3:6], inertia_B=model.body_inertia[1].copy()
+    )
+
+
+def set_free_body_rotation(data: mujoco.MjData, omega_B: np.ndarray) -> None:
+    """Place the free body at the origin, unrotated, at rest except for body-frame angular velocity omega_B."""
+    data.qpos[:] = [0, 0, 0, 1, 0, 0, 0]
+    data.qvel[:] = [0, 0, 0, *omega_B]
+
+
+class RotorEnv(ScenarioEnv):
+    """Env plumbing for one rigid body turning about a point: observation [quaternion, body rates], action a
+    world-frame torque on the body (N m), clipped to +-`max_torque`. Subclasses implement `_compare`.
+
+    Observation (float64, shape (7,))
+
+    ==== ============================================ ============= ==========================
+    idx  quantity                                     unit          MuJoCo source
+    ==== ============================================ ============= ==========================
+    0-3  body-to-world quaternion (w, x, y, z)        1             joint qpos
+    4-6  angular velocity omega_B in body axes        rad/s         joint qvel (ball or free)
+    ==== ============================================ ============= ==========================
+    """
+
+    max_torque: ClassVar[float] = 1.0
+    body: ClassVar[str] = "top"
+
+    def _observation_space(self) -> gym.spaces.Box:
+        high = np.full(7, np.inf)
+        high[:4] = 1.0
+        return gym.spaces.Box(-high, high, dtype=np.float64)
+
+    def _action_space(self) -> gym.spaces.Box:
+        return gym.spaces.Box(-self.max_torque, self.max_torque, shape=(3,), dtype=np.float64)
+
+    def _observation(self) -> np.ndarray:
+        adr = self.model.jnt_qposadr[0]
+        quat = self.data.qpos[adr + (3 if self.model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE else 0) :][:4]
+        return np.concatenate([quat / np.linalg.norm(quat), self.data.qvel[-3:]])
+
+    def _apply_action(self, action: np.ndarray) -> None:
+        self.data.xfrc_applied[self.model.body(self.body).id, 3:6] = action
+
+
+class FreeRotorEnv(RotorEnv):
+    """A torque-free top's env: the theory is the body-frame omega(t) of the scenario's closed form."""
+
+    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
+        omega_B = self.data.qvel[3:6].copy()
+        theory = self.prediction["_theory"].omega_body(np.array([self.data.time]))[0]
+        deviation = float(np.linalg.norm(omega_B - theory) / np.linalg.norm(theory))
+        return deviation, {"omega_body": omega_B}, {"omega_body": theory}

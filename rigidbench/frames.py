@@ -1,0 +1,74 @@
+"""Frames and rotations, vectorised over time.
+
+Quaternions are MuJoCo's (w, x, y, z), body-to-world. `R_WB` maps body-frame components to world-frame ones.
+Euler angles follow THEORY.md section 0 (z-x-z, Goldstein = Wilcox section 11.7): R = Rz(phi) Rx(theta) Rz(psi).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def quat_to_matrix(quat: np.ndarray) -> np.ndarray:
+    """Rotation matrices R_WB, shape (..., 3, 3), from unit quaternions (w, x, y, z), shape (..., 4).
+
+    The quaternions are normalised first (MuJoCo normalises them only when it integrates).
+    """
+    q = np.asarray(quat, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
+        ],
+        axis=-2,
+    )
+
+
+def body_to_world(R_WB: np.ndarray, v_B: np.ndarray) -> np.ndarray:
+    """Rotate body-frame vectors, shape (..., 3), into the world frame."""
+    return np.einsum("...ij,...j->...i", R_WB, v_B)
+
+
+def quat_from_euler_zxz(phi: float, theta: float, psi: float) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of R = Rz(phi) Rx(theta) Rz(psi)."""
+
+    def about(axis: int, angle: float) -> np.ndarray:
+        q = np.zeros(4)
+        q[0] = np.cos(angle / 2)
+        q[1 + axis] = np.sin(angle / 2)
+        return q
+
+    return _qmul(_qmul(about(2, phi), about(0, theta)), about(2, psi))
+
+
+def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return np.array(
+        [
+            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+        ]
+    )
+
+
+def azimuth_about(axis_W: np.ndarray, v_W: np.ndarray) -> np.ndarray:
+    """Angle (rad) of vectors `v_W`, shape (n, 3), about the fixed unit `axis_W`, from an arbitrary zero."""
+    a = axis_W / np.linalg.norm(axis_W)
+    helper = np.eye(3)[np.argmin(np.abs(a))]
+    u = np.cross(a, helper)
+    u /= np.linalg.norm(u)
+    w = np.cross(a, u)
+    return np.arctan2(v_W @ w, v_W @ u)
+
+
+def angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Angle (rad) between rows of `a` and `b` (or a fixed vector), robust near 0 and pi."""
+    cross = np.linalg.norm(np.cross(a, b), axis=-1)
+    dot = np.sum(a * b, axis=-1)
+    return np.arctan2(cross, dot)

@@ -1,0 +1,206 @@
+"""Scenario parameters: named, in SI units, validated, applied through `mujoco.MjSpec` and read back.
+
+A parameter's default lives in the scenario's MJCF file (house rule 3): either as a native model property
+(a body's mass, inertia or centre of mass, the gravity vector) or, for initial conditions and other numbers
+MuJoCo has no element for, as a `<custom><numeric>` entry. A `Target` knows where the number lives: it
+writes a value into an `MjSpec` and reads the compiled value back from the `MjModel`, so what a prediction
+uses is what MuJoCo simulated.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import mujoco
+import numpy as np
+
+Value = float | tuple[float, ...]
+
+
+class Target(Protocol):
+    """Where a parameter's number lives in a model."""
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None: ...
+
+    def read(self, model: mujoco.MjModel) -> Value: ...
+
+
+@dataclass(frozen=True)
+class Numeric:
+    """A `<custom><numeric name=...>` entry (initial conditions and other scenario numbers)."""
+
+    name: str
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        spec.numeric(self.name).data = list(np.atleast_1d(value))
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return _unwrap(model.numeric(self.name).data)
+
+
+@dataclass(frozen=True)
+class BodyMass:
+    body: str
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        spec.body(self.body).mass = float(value)
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(model.body(self.body).mass[0])
+
+
+@dataclass(frozen=True)
+class BodyInertia:
+    """Principal moments about the body's centre of mass; `axes` are the diagonal entries this sets."""
+
+    body: str
+    axes: tuple[int, ...]
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        inertia = np.array(spec.body(self.body).inertia, dtype=float)
+        inertia[list(self.axes)] = float(value)
+        spec.body(self.body).inertia = inertia
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(model.body(self.body).inertia[self.axes[0]])
+
+
+@dataclass(frozen=True)
+class BodyComOffset:
+    """One coordinate of a body's centre of mass in the body frame (m)."""
+
+    body: str
+    axis: int
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        ipos = np.array(spec.body(self.body).ipos, dtype=float)
+        ipos[self.axis] = float(value)
+        spec.body(self.body).ipos = ipos
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(model.body(self.body).ipos[self.axis])
+
+
+@dataclass(frozen=True)
+class Gravity:
+    """Magnitude of gravity along -z (m/s^2)."""
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        spec.option.gravity = [0.0, 0.0, -float(value)]
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(-model.opt.gravity[2])
+
+
+def _unwrap(data: np.ndarray) -> Value:
+    values = tuple(float(x) for x in np.ravel(data))
+    return values[0] if len(values) == 1 else values
+
+
+@dataclass(frozen=True)
+class Range:
+    """An interval of valid values; `low_open`/`high_open` exclude the end point."""
+
+    low: float
+    high: float
+    low_open: bool = False
+    high_open: bool = False
+
+    def __contains__(self, x: float) -> bool:
+        above = x > self.low if self.low_open else x >= self.low
+        below = x < self.high if self.high_open else x <= self.high
+        return above and below
+
+    def __str__(self) -> str:
+        return f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+
+
+def positive(high: float) -> Range:
+    """The interval (0, high]."""
+    return Range(0.0, high, low_open=True)
+
+
+@dataclass(frozen=True)
+class Param:
+    """One public, named scenario parameter.
+
+    Attributes
+    ----------
+    name : str
+        Public name (``--set name=value``, ``options={"params": {name: value}}``).
+    unit : str
+        SI unit of the value, e.g. ``"kg m^2"``; ``"1"`` for dimensionless.
+    doc : str
+        One sentence: what the number is, with its convention (frame, reference point, sign).
+    valid : Range
+        Valid range for each component.
+    target : Target
+        Where the value lives in the model.
+    size : int
+        Number of components (3 for a vector such as a body-frame angular velocity).
+    """
+
+    name: str
+    unit: str
+    doc: str
+    valid: Range
+    target: Target
+    size: int = 1
+
+    def parse(self, text: str) -> Value:
+        """Parse a command-line value (``"0.3"`` or ``"0.1,5,0.1"``) and validate it.
+
+        Raises
+        ------
+        ValueError
+            If the text is not a number (or comma-separated numbers) or the value is invalid.
+        """
+        try:
+            parts = [float(p) for p in text.split(",")]
+        except ValueError:
+            raise ValueError(f"parameter '{self.name}': cannot read {text!r} as {self._shape_words()}") from None
+        return self.check(parts[0] if len(parts) == 1 else parts)
+
+    def check(self, value: object) -> Value:
+        """Return `value` as a float (or tuple of floats) after checking type, shape, finiteness and range.
+
+        Raises
+        ------
+        ValueError
+            Naming the parameter, the value and the valid range.
+        """
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"parameter '{self.name}': expected {self._shape_words()}, got {value!r}") from None
+        if arr.size != self.size or (self.size == 1 and arr.ndim > 1):
+            raise ValueError(f"parameter '{self.name}': expected {self._shape_words()}, got {value!r}")
+        for x in arr.ravel():
+            if not math.isfinite(x):
+                raise ValueError(f"parameter '{self.name}' = {value!r} is not finite")
+            if x not in self.valid:
+                raise ValueError(
+                    f"parameter '{self.name}' = {_fmt(value)} {self.unit} is outside the valid range "
+                    f"{self.valid} {self.unit}"
+                )
+        return _unwrap(arr)
+
+    def _shape_words(self) -> str:
+        return "a number" if self.size == 1 else f"{self.size} comma-separated numbers"
+
+
+def _fmt(value: object) -> str:
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return ",".join(f"{float(x):g}" for x in np.ravel(value))
+    return f"{float(value):g}" if isinstance(value, (int, float)) else repr(value)
+
+
+def check_known(params: Sequence[Param], names: Mapping[str, object] | Sequence[str], owner: str) -> None:
+    """Refuse parameter names the scenario does not have, listing the ones it does."""
+    known = {p.name for p in params}
+    for name in names:
+        if name not in known:
+            raise ValueError(f"unknown parameter '{name}' for scenario '{owner}'; valid: {', '.join(sorted(known))}")

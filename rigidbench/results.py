@@ -1,0 +1,183 @@
+"""Result rows and their formats: JSON for machines, JUnit XML for CI, a text table for people.
+
+One row per check (DESIGN.md "Results"): scenario, case, check, unit, measured, expected, error, tolerance
+(with its kind and reason), status, settings, params, and the MuJoCo and rigidbench versions. A case whose
+simulation diverged yields a single row with status ``"diverged"``, ``passed = None`` and the time it
+happened: it is never scored against theory.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import mujoco
+
+from rigidbench.scenario import CaseRun
+
+PASS, FAIL, DIVERGED = "pass", "fail", "diverged"
+
+
+def rows_of(run: CaseRun) -> list[dict[str, Any]]:
+    """The result rows of one simulated case."""
+    common = {
+        "scenario": run.scenario,
+        "case": run.case,
+        "settings": run.settings,
+        "params": run.params,
+        "duration": run.duration,
+        "nstep": run.nstep,
+        "wall_time": run.wall_time,
+    }
+    if run.diverged_at is not None:
+        return [
+            {
+                **common,
+                "check": "diverged",
+                "unit": "s",
+                "measured": run.diverged_at,
+                "expected": None,
+                "error": None,
+                "tolerance": None,
+                "tolerance_kind": None,
+                "tolerance_reason": None,
+                "theory": None,
+                "status": DIVERGED,
+                "passed": None,
+                "diverged_at": run.diverged_at,
+            }
+        ]
+    return [
+        {
+            **common,
+            "check": o.check.name,
+            "unit": o.check.unit,
+            "measured": o.measured,
+            "expected": o.expected,
+            "error": o.error,
+            "tolerance": o.check.tolerance,
+            "tolerance_kind": o.check.kind,
+            "tolerance_reason": o.check.reason,
+            "theory": o.check.theory,
+            "status": PASS if o.passed else FAIL,
+            "passed": o.passed,
+            "diverged_at": None,
+        }
+        for o in run.outcomes
+    ]
+
+
+def document(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    from rigidbench import __version__
+
+    return {"rigidbench": __version__, "mujoco": mujoco.__version__, "results": list(rows)}
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, float) and not math.isfinite(x):
+        return None if math.isnan(x) else ("inf" if x > 0 else "-inf")
+    if isinstance(x, dict):
+        return {k: _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    return x
+
+
+def atomic_write(path: str, text: str) -> None:
+    """Write `text` to `path` through a temporary file and a rename, so a reader never sees half a file."""
+    directory = os.path.dirname(os.path.abspath(path))
+    os.makedirs(directory, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".rigidbench-", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
+def write_json(path: str, rows: Sequence[dict[str, Any]]) -> None:
+    atomic_write(path, json.dumps(_jsonable(document(rows)), indent=1) + "\n")
+
+
+def write_junit(path: str, rows: Sequence[dict[str, Any]]) -> None:
+    """JUnit XML: one testsuite per scenario, one testcase per check (``case:check``)."""
+    suites = ET.Element("testsuites", name="rigidbench")
+    by_scenario: dict[str, list[dict[str, Any]]] = {}
+    for row in rows:
+        by_scenario.setdefault(row["scenario"], []).append(row)
+    for scenario, group in by_scenario.items():
+        failures = sum(r["status"] == FAIL for r in group)
+        errors = sum(r["status"] == DIVERGED for r in group)
+        suite = ET.SubElement(
+            suites,
+            "testsuite",
+            name=scenario,
+            tests=str(len(group)),
+            failures=str(failures),
+            errors=str(errors),
+            time=f"{sum({(r['case']): r['wall_time'] for r in group}.values()):.3f}",
+        )
+        props = ET.SubElement(suite, "properties")
+        ET.SubElement(props, "property", name="mujoco", value=mujoco.__version__)
+        ET.SubElement(props, "property", name="settings", value=json.dumps(group[0]["settings"]))
+        for row in group:
+            case = ET.SubElement(suite, "testcase", classname=f"rigidbench.{scenario}.{row['case']}", name=row["check"])
+            if row["status"] == FAIL:
+                ET.SubElement(case, "failure", message=_verdict_line(row)).text = row["tolerance_reason"]
+            elif row["status"] == DIVERGED:
+                ET.SubElement(case, "error", message=f"simulation diverged at t = {row['diverged_at']:.6g} s")
+            ET.SubElement(case, "system-out").text = json.dumps(_jsonable({"params": row["params"]}))
+    ET.indent(suites)
+    atomic_write(path, ET.tostring(suites, encoding="unicode", xml_declaration=True) + "\n")
+
+
+def _verdict_line(row: dict[str, Any]) -> str:
+    return (
+        f"measured {row['measured']:.10g} {row['unit']}, expected {row['expected']:.10g}: "
+        f"{row['tolerance_kind']} error {row['error']:.2e} > tolerance {row['tolerance']:.1e}"
+    )
+
+
+def _num(x: float | None) -> str:
+    if x is None:
+        return "-"
+    return f"{x:.10g}" if math.isfinite(x) else str(x)
+
+
+def table(rows: Iterable[dict[str, Any]]) -> str:
+    """A fixed-width text table: target, check, measured, expected, error, tolerance, verdict."""
+    header = ("target", "check", "measured", "expected", "unit", "error", "tolerance", "verdict")
+    lines = []
+    for r in rows:
+        tol = "-" if r["tolerance"] is None else f"{r['tolerance']:.0e} {r['tolerance_kind']}"
+        err = "-" if r["error"] is None else f"{r['error']:.2e}"
+        verdict = f"DIVERGED at t={r['diverged_at']:.4g} s" if r["status"] == DIVERGED else r["status"].upper()
+        lines.append(
+            (
+                f"{r['scenario']}:{r['case']}",
+                r["check"],
+                _num(r["measured"]),
+                _num(r["expected"]),
+                r["unit"],
+                err,
+                tol,
+                verdict,
+            )
+        )
+    widths = [max(len(str(x)) for x in col) for col in zip(header, *lines, strict=False)]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
+    out = [fmt.format(*header), fmt.format(*("-" * w for w in widths))]
+    out += [fmt.format(*line) for line in lines]
+    return "\n".join(out)
+
+
+def summary(rows: Sequence[dict[str, Any]]) -> str:
+    n = {s: sum(r["status"] == s for r in rows) for s in (PASS, FAIL, DIVERGED)}
+    return f"{n[PASS]} passed, {n[FAIL]} failed, {n[DIVERGED]} diverged ({len(rows)} checks)"

@@ -1,0 +1,86 @@
+"""The validation runner: targets x profile x overrides -> result rows.
+
+Every target, parameter and setting is resolved and validated before the first simulation starts, so bad
+input costs nothing and never leaves a half-finished run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from rigidbench import registry
+from rigidbench.results import rows_of
+from rigidbench.scenario import Scenario
+from rigidbench.settings import Settings, profile
+
+
+@dataclass(frozen=True)
+class Job:
+    """One case of one scenario, with its parameter overrides (already validated)."""
+
+    scenario: Scenario
+    case: str
+    overrides: Mapping[str, Any]
+
+    @property
+    def name(self) -> str:
+        return f"{self.scenario.slug}:{self.case}"
+
+
+def plan(
+    targets: Sequence[str],
+    overrides: Mapping[str, str] | None = None,
+) -> list[Job]:
+    """Expand targets (``scenario`` or ``scenario:case``; none = every scenario) into validated jobs.
+
+    `overrides` maps parameter names to command-line text (``"0.3"``, ``"0.1,5,0.1"``); each scenario parses
+    them with its own parameter definitions.
+
+    Raises
+    ------
+    ValueError
+        For an unknown scenario, case or parameter, or an invalid value (naming it).
+    """
+    overrides = dict(overrides or {})
+    jobs = []
+    for target in targets or list(registry.scenarios()):
+        scenario, cases = registry.parse_target(target)
+        parsed = {}
+        for name, text in overrides.items():
+            try:
+                parsed[name] = scenario.param(name).parse(text)
+            except ValueError as exc:
+                raise ValueError(f"{scenario.slug}: {exc}") from None
+        for case in cases:
+            try:
+                scenario.resolve(scenario.case(case), parsed)
+            except ValueError as exc:
+                raise ValueError(f"{scenario.slug}:{case}: {exc}") from None
+            jobs.append(Job(scenario, case, parsed))
+    return jobs
+
+
+def settings_for(profile_name: str, integrator: str | None = None, timestep: float | None = None) -> Settings:
+    """The named profile with command-line overrides on top.
+
+    Raises
+    ------
+    ValueError
+        For an unknown profile or integrator, or a timestep outside (0, 0.1] s.
+    """
+    return profile(profile_name).merged(Settings(integrator=integrator, timestep=timestep))
+
+
+def execute(
+    jobs: Sequence[Job],
+    settings: Settings,
+    *,
+    progress: Callable[[int, int, Job], None] | None = None,
+) -> Iterator[list[dict[str, Any]]]:
+    """Run the jobs in order, yielding each job's result rows as soon as it finishes."""
+    for i, job in enumerate(jobs):
+        if progress is not None:
+            progress(i, len(jobs), job)
+        yield rows_of(job.scenario.run(job.case, job.overrides, settings))

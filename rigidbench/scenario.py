@@ -1,0 +1,327 @@
+"""The scenario core (DESIGN.md): model, parameters, cases, observables, predictions, checks.
+
+A scenario is an MJCF file plus a `Scenario` subclass with the same stem, in ``envs/``. The subclass says
+which numbers are public parameters, which named cases exist, how to set the initial state, what to measure
+from a trajectory and what theory (``analytic/``) predicts for it. Everything else (resolving parameters,
+compiling through `MjSpec`, reading values back, running, scoring, recording) lives here once, and the CLI,
+the gymnasium env, the dm_env task and the tests are views of it.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.resources
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import mujoco
+import numpy as np
+
+from rigidbench.params import Param, Value, check_known
+from rigidbench.settings import Settings, read_settings
+from rigidbench.simulate import Trajectory, simulate
+
+Params = dict[str, Value]
+# A case value is a number, or a function of the other resolved parameters (e.g. a steady-precession rate).
+CaseValue = Value | Callable[[Mapping[str, Value]], Value]
+
+
+@dataclass(frozen=True)
+class Case:
+    """A named initial condition / parameter set that exercises distinct physics.
+
+    Attributes
+    ----------
+    name : str
+    doc : str
+    values : mapping of parameter name to a value or to a function of the resolved parameters
+        Values given as functions are derived (e.g. the steady-precession rate from the spin and tilt); a
+        user's explicit ``--set`` of that parameter wins over the derivation.
+    checks : tuple of str
+        Names of the scenario's checks that apply to this case.
+    """
+
+    name: str
+    doc: str
+    values: Mapping[str, CaseValue]
+    checks: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Check:
+    """An observable, its tolerance and the reason for that tolerance.
+
+    Attributes
+    ----------
+    name : str
+        Public name of the check, e.g. ``"nutation-period"``.
+    unit : str
+        Unit of `measured` and `expected`.
+    tolerance : float
+        Largest accepted error, in the unit for ``kind="abs"``, a fraction for ``kind="rel"``.
+    kind : {"rel", "abs"}
+        Relative error ``|m - e| / |e|`` or absolute error ``|m - e|``.
+    reason : str
+        Where the tolerance comes from (integrator order and step, contact stiffness, statistics, ...).
+    theory : str
+        THEORY.md entry and seed location of the prediction.
+    """
+
+    name: str
+    unit: str
+    tolerance: float
+    kind: str
+    reason: str
+    theory: str
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("rel", "abs"):
+            raise ValueError(f"check {self.name}: kind must be 'rel' or 'abs', not {self.kind!r}")
+
+    def error(self, measured: float, expected: float) -> float:
+        diff = abs(measured - expected)
+        if self.kind == "abs":
+            return diff
+        return diff / abs(expected) if expected != 0 else math.inf
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One scored check: a result row without the run's context."""
+
+    check: Check
+    measured: float
+    expected: float
+
+    @property
+    def error(self) -> float:
+        return self.check.error(self.measured, self.expected)
+
+    @property
+    def passed(self) -> bool:
+        return bool(np.isfinite(self.error) and self.error <= self.check.tolerance)
+
+
+@dataclass
+class CaseRun:
+    """Everything one simulated case produced."""
+
+    scenario: str
+    case: str
+    params: Params
+    settings: dict
+    outcomes: list[Outcome]
+    diverged_at: float | None
+    duration: float
+    nstep: int
+    wall_time: float
+    trajectory: Trajectory | None = field(default=None, repr=False)
+    prediction: Mapping[str, Any] | None = field(default=None, repr=False)
+
+
+class Scenario:
+    """Base class of every scenario. Subclasses set the class attributes and implement the hooks.
+
+    Class attributes
+    ----------------
+    slug : str
+        Public name, e.g. ``"heavy-top"``; the MJCF file is ``models/<slug with underscores>.xml``.
+    title, doc : str
+        One line, and a paragraph with the theory references.
+    params : tuple of Param
+    cases : tuple of Case
+        The first case is the default.
+    checks : tuple of Check
+    env_id : str
+        Gymnasium id, e.g. ``"rigidbench/HeavyTop-v0"``.
+    """
+
+    slug: ClassVar[str]
+    title: ClassVar[str]
+    params: ClassVar[tuple[Param, ...]]
+    cases: ClassVar[tuple[Case, ...]]
+    checks: ClassVar[tuple[Check, ...]]
+    env_id: ClassVar[str]
+
+    # ---- hooks -------------------------------------------------------------------------------------------
+
+    def validate(self, params: Mapping[str, Value]) -> None:
+        """Cross-parameter validity (e.g. the inertia triangle inequality). Raise ValueError naming them."""
+
+    def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Value]) -> None:
+        """Set qpos/qvel (and anything else) of `data` from the parameters."""
+        raise NotImplementedError
+
+    def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
+        """Closed-form predictions from the compiled model and the initial state in `data` (after mj_forward).
+
+        Returns a mapping with one entry per check name (the expected value), plus any extra quantities
+        `measure`, `duration` and the envs need (prefixed with an underscore by convention).
+        """
+        raise NotImplementedError
+
+    def duration(self, prediction: Mapping[str, Any]) -> float:
+        """Simulated time (s) the case needs, from the predicted time scales."""
+        raise NotImplementedError
+
+    def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
+        """The measured value of each check, from the trajectory."""
+        raise NotImplementedError
+
+    # ---- the core ---------------------------------------------------------------------------------------
+
+    @property
+    def file_stem(self) -> str:
+        return self.slug.replace("-", "_")
+
+    def spec(self) -> mujoco.MjSpec:
+        """A fresh MjSpec of the scenario's model file."""
+        return mujoco.MjSpec.from_string(_model_xml(self.file_stem))
+
+    def param(self, name: str) -> Param:
+        for p in self.params:
+            if p.name == name:
+                return p
+        check_known(self.params, [name], self.slug)
+        raise AssertionError  # unreachable
+
+    def case(self, name: str | None) -> Case:
+        """The named case (the first one if `name` is None).
+
+        Raises
+        ------
+        ValueError
+            If the scenario has no case of that name.
+        """
+        if name is None:
+            return self.cases[0]
+        for c in self.cases:
+            if c.name == name:
+                return c
+        raise ValueError(
+            f"unknown case '{name}' for scenario '{self.slug}'; valid: {', '.join(c.name for c in self.cases)}"
+        )
+
+    def check(self, name: str) -> Check:
+        return next(c for c in self.checks if c.name == name)
+
+    def defaults(self) -> Params:
+        """Parameter defaults, read from the compiled model file."""
+        return _defaults(type(self))
+
+    def resolve(self, case: Case, overrides: Mapping[str, object] | None = None) -> Params:
+        """Parameters for `case`: model defaults, then the case's values, then the user's overrides;
+        derived case values are computed last from the others, unless the user set them.
+
+        Raises
+        ------
+        ValueError
+            For an unknown parameter, or one of the wrong shape, not finite, or out of its range.
+        """
+        overrides = dict(overrides or {})
+        check_known(self.params, overrides, self.slug)
+        values: dict[str, Value] = dict(self.defaults())
+        derived = {}
+        for name, v in case.values.items():
+            if callable(v):
+                derived[name] = v
+            else:
+                values[name] = v
+        for name, v in overrides.items():
+            values[name] = self.param(name).check(v)
+        for p in self.params:
+            if p.name not in derived or p.name in overrides:
+                values[p.name] = p.check(values[p.name])
+        for name, fn in derived.items():
+            if name not in overrides:
+                values[name] = self.param(name).check(fn(values))
+        self.validate(values)
+        return values
+
+    def build(self, params: Mapping[str, Value], settings: Settings | None = None) -> mujoco.MjModel:
+        """Compile the model with `params` applied through MjSpec and `settings` on top.
+
+        Raises
+        ------
+        ValueError
+            If MuJoCo refuses the model (the message is MuJoCo's, prefixed with the scenario).
+        """
+        spec = self.spec()
+        for p in self.params:
+            p.target.apply(spec, params[p.name])
+        if settings is not None:
+            settings.apply(spec)
+        try:
+            return spec.compile()
+        except ValueError as exc:  # MuJoCo's compiler errors
+            raise ValueError(f"scenario '{self.slug}': MuJoCo refused the model: {exc}") from None
+
+    def read_params(self, model: mujoco.MjModel) -> Params:
+        """The parameters as compiled (what is actually simulated)."""
+        return {p.name: p.target.read(model) for p in self.params}
+
+    def start(self, model: mujoco.MjModel, params: Mapping[str, Value] | None = None) -> mujoco.MjData:
+        """A new MjData at the case's initial state, with derived quantities computed (mj_forward)."""
+        data = mujoco.MjData(model)
+        self.initial_state(model, data, self.read_params(model) if params is None else params)
+        mujoco.mj_forward(model, data)
+        return data
+
+    def run(
+        self,
+        case: str | None = None,
+        overrides: Mapping[str, object] | None = None,
+        settings: Settings | None = None,
+        *,
+        keep_trajectory: bool = False,
+    ) -> CaseRun:
+        """Simulate one case and score every check it names.
+
+        Raises
+        ------
+        ValueError
+            For invalid parameters or settings (before anything is simulated).
+        """
+        import time as _time
+
+        c = self.case(case)
+        params = self.resolve(c, overrides)
+        model = self.build(params, settings)
+        actual = self.read_params(model)
+        data = self.start(model, actual)
+        prediction = self.predict(model, data)
+        duration = float(self.duration(prediction))
+        t0 = _time.perf_counter()
+        traj = simulate(model, data, duration)
+        wall = _time.perf_counter() - t0
+        outcomes = []
+        if traj.diverged_at is None:
+            measured = self.measure(model, traj, prediction)
+            outcomes = [Outcome(self.check(name), float(measured[name]), float(prediction[name])) for name in c.checks]
+        return CaseRun(
+            scenario=self.slug,
+            case=c.name,
+            params=actual,
+            settings=read_settings(model),
+            outcomes=outcomes,
+            diverged_at=traj.diverged_at,
+            duration=duration,
+            nstep=len(traj.time) - 1,
+            wall_time=wall,
+            trajectory=traj if keep_trajectory else None,
+            prediction=prediction if keep_trajectory else None,
+        )
+
+
+@functools.cache
+def _model_xml(stem: str) -> str:
+    return importlib.resources.files("rigidbench.models").joinpath(f"{stem}.xml").read_text()
+
+
+@functools.cache
+def _defaults(cls: type[Scenario]) -> Params:
+    scenario = cls()
+    model = scenario.spec().compile()
+    return scenario.read_params(model)

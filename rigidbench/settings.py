@@ -1,0 +1,126 @@
+"""Simulation settings and profiles.
+
+Settings are part of what is measured (DESIGN.md). The scenario's MJCF file holds its *reference* settings
+(integrator, timestep, contact softness), each commented with the reason; a profile overrides some of them.
+Whatever the profile, the settings recorded with a result are read back from the compiled model.
+
+Profiles
+--------
+reference
+    The model file as written: settings under which MuJoCo should reproduce the theory closely.
+mujoco-default
+    What a user gets by writing the model naively: MuJoCo's default integrator (Euler), 2 ms step, default
+    solref/solimp on every geom, pyramidal friction cone. Failures here are the benchmark's findings.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import mujoco
+
+INTEGRATORS = {
+    "Euler": mujoco.mjtIntegrator.mjINT_EULER,
+    "RK4": mujoco.mjtIntegrator.mjINT_RK4,
+    "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+    "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+}
+CONES = {"pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL, "elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC}
+
+# MuJoCo's own defaults (MJCF reference, <geom solref solimp>, <option>).
+MUJOCO_DEFAULT_SOLREF = (0.02, 1.0)
+MUJOCO_DEFAULT_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
+MUJOCO_DEFAULT_TIMESTEP = 0.002
+
+# Largest timestep accepted (s): beyond this no scenario here is meaningful, and MuJoCo accepts anything.
+MAX_TIMESTEP = 0.1
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Overrides of the model's simulation options; ``None`` keeps what the model file says.
+
+    Attributes
+    ----------
+    integrator : {"Euler", "RK4", "implicit", "implicitfast"} or None
+    timestep : float or None
+        Seconds, in (0, 0.1].
+    cone : {"pyramidal", "elliptic"} or None
+    solref, solimp : tuple of float or None
+        Applied to every geom and explicit contact pair (MuJoCo's contact softness).
+    """
+
+    integrator: str | None = None
+    timestep: float | None = None
+    cone: str | None = None
+    solref: tuple[float, ...] | None = None
+    solimp: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        if self.integrator is not None and self.integrator not in INTEGRATORS:
+            raise ValueError(f"integrator {self.integrator!r} is not one of {', '.join(INTEGRATORS)}")
+        if self.timestep is not None and not 0.0 < self.timestep <= MAX_TIMESTEP:
+            raise ValueError(f"timestep = {self.timestep!r} s is outside the valid range (0, {MAX_TIMESTEP}] s")
+        if self.cone is not None and self.cone not in CONES:
+            raise ValueError(f"cone {self.cone!r} is not one of {', '.join(CONES)}")
+
+    def merged(self, other: Settings) -> Settings:
+        """These settings with every field `other` sets replaced by `other`'s value."""
+        changes = {k: v for k, v in vars(other).items() if v is not None}
+        return replace(self, **changes)
+
+    def apply(self, spec: mujoco.MjSpec) -> None:
+        """Write the overrides into `spec` (before compiling)."""
+        if self.integrator is not None:
+            spec.option.integrator = INTEGRATORS[self.integrator]
+        if self.timestep is not None:
+            spec.option.timestep = self.timestep
+        if self.cone is not None:
+            spec.option.cone = CONES[self.cone]
+        for element in (*spec.geoms, *spec.pairs):
+            if self.solref is not None:
+                element.solref = list(self.solref)
+            if self.solimp is not None:
+                element.solimp = list(self.solimp)
+
+
+PROFILES: dict[str, Settings] = {
+    "reference": Settings(),
+    "mujoco-default": Settings(
+        integrator="Euler",
+        timestep=MUJOCO_DEFAULT_TIMESTEP,
+        cone="pyramidal",
+        solref=MUJOCO_DEFAULT_SOLREF,
+        solimp=MUJOCO_DEFAULT_SOLIMP,
+    ),
+}
+
+
+def profile(name: str) -> Settings:
+    """The settings of a named profile.
+
+    Raises
+    ------
+    ValueError
+        If `name` is not a known profile.
+    """
+    if name not in PROFILES:
+        raise ValueError(f"profile {name!r} is not one of {', '.join(PROFILES)}")
+    return PROFILES[name]
+
+
+def read_settings(model: mujoco.MjModel) -> dict:
+    """The settings a compiled model actually uses, for the results record (values immutable)."""
+    names = {v: k for k, v in INTEGRATORS.items()}
+    cones = {v: k for k, v in CONES.items()}
+    out = {
+        "integrator": names.get(mujoco.mjtIntegrator(model.opt.integrator), str(model.opt.integrator)),
+        "timestep": float(model.opt.timestep),
+        "cone": cones[mujoco.mjtCone(model.opt.cone)],
+        "mujoco": mujoco.__version__,
+    }
+    contact = [i for i in range(model.ngeom) if model.geom_contype[i] or model.geom_conaffinity[i]]
+    if contact:
+        out["solref"] = tuple(sorted({tuple(float(x) for x in model.geom_solref[i]) for i in contact}))
+        out["solimp"] = tuple(sorted({tuple(float(x) for x in model.geom_solimp[i]) for i in contact}))
+    return out
