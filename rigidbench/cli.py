@@ -100,7 +100,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     try:  # every input is validated here, before anything is simulated
         settings = runner.settings_for(args.profile, args.integrator, args.timestep)
-        jobs = runner.plan(args.targets, _parse_sets(args.sets))
+        jobs = runner.plan(args.targets, _parse_sets(args.sets), settings)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
 

@@ -85,6 +85,20 @@ class BodyComOffset:
 
 
 @dataclass(frozen=True)
+class ContactStiffness:
+    """Stiffness k (1/s^2) of an elastic contact on the named geoms: solref = (-k, 0) (`rigidbench.contact`)."""
+
+    geoms: tuple[str, ...]
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        for name in self.geoms:
+            spec.geom(name).solref = [-float(value), 0.0]
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(-model.geom(self.geoms[0]).solref[0])
+
+
+@dataclass(frozen=True)
 class Gravity:
     """Magnitude of gravity along -z (m/s^2)."""
 

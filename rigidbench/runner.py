@@ -32,11 +32,13 @@ class Job:
 def plan(
     targets: Sequence[str],
     overrides: Mapping[str, str] | None = None,
+    settings: Settings | None = None,
 ) -> list[Job]:
     """Expand targets (``scenario`` or ``scenario:case``; none = every scenario) into validated jobs.
 
     `overrides` maps parameter names to command-line text (``"0.3"``, ``"0.1,5,0.1"``); each scenario parses
-    them with its own parameter definitions.
+    them with its own parameter definitions. Each job's model is compiled once under `settings` so that
+    settings-dependent checks (`Scenario.check_model`) fail here too.
 
     Raises
     ------
@@ -55,7 +57,8 @@ def plan(
                 raise ValueError(f"{scenario.slug}: {exc}") from None
         for case in cases:
             try:
-                scenario.resolve(scenario.case(case), parsed)
+                params = scenario.resolve(scenario.case(case), parsed)
+                scenario.build(params, settings)  # compile-time checks, e.g. contact stiffness vs timestep
             except ValueError as exc:
                 raise ValueError(f"{scenario.slug}:{case}: {exc}") from None
             jobs.append(Job(scenario, case, parsed))

@@ -150,6 +150,12 @@ class Scenario:
     def validate(self, params: Mapping[str, Value]) -> None:
         """Cross-parameter validity (e.g. the inertia triangle inequality). Raise ValueError naming them."""
 
+    def check_model(self, model: mujoco.MjModel) -> None:
+        """Validity of the compiled model under its settings (e.g. contact stiffness against the timestep).
+
+        Called by `build`; raise ValueError naming the parameter or setting and its valid range.
+        """
+
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Value]) -> None:
         """Set qpos/qvel (and anything else) of `data` from the parameters."""
         raise NotImplementedError
@@ -246,7 +252,8 @@ class Scenario:
         Raises
         ------
         ValueError
-            If MuJoCo refuses the model (the message is MuJoCo's, prefixed with the scenario).
+            If MuJoCo refuses the model (the message is MuJoCo's, prefixed with the scenario), or
+            `check_model` does.
         """
         spec = self.spec()
         for p in self.params:
@@ -254,9 +261,11 @@ class Scenario:
         if settings is not None:
             settings.apply(spec)
         try:
-            return spec.compile()
+            model = spec.compile()
         except ValueError as exc:  # MuJoCo's compiler errors
             raise ValueError(f"scenario '{self.slug}': MuJoCo refused the model: {exc}") from None
+        self.check_model(model)
+        return model
 
     def read_params(self, model: mujoco.MjModel) -> Params:
         """The parameters as compiled (what is actually simulated)."""
