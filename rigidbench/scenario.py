@@ -21,7 +21,7 @@ import numpy as np
 
 from rigidbench.params import Param, Value, check_known
 from rigidbench.settings import Settings, read_settings
-from rigidbench.simulate import Trajectory, simulate
+from rigidbench.simulate import Trajectory, simulate, steps_for
 
 Params = dict[str, Value]
 # A case value is a number, or a function of the other resolved parameters (e.g. a steady-precession rate).
@@ -172,6 +172,13 @@ class Scenario:
         """Simulated time (s) the case needs, from the predicted time scales."""
         raise NotImplementedError
 
+    def control(self, model: mujoco.MjModel, timestep: float, nstep: int) -> np.ndarray | None:
+        """Open-loop actuator controls for the run, shape (nstep, model.nu), or None (no actuators driven).
+
+        Row i holds the controls applied during step i, i.e. over [i dt, (i + 1) dt).
+        """
+        return None
+
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
         """The measured value of each check, from the trajectory."""
         raise NotImplementedError
@@ -303,7 +310,8 @@ class Scenario:
         prediction = self.predict(model, data)
         duration = float(self.duration(prediction))
         t0 = _time.perf_counter()
-        traj = simulate(model, data, duration)
+        nstep = steps_for(duration, model.opt.timestep)
+        traj = simulate(model, data, duration, control=self.control(model, model.opt.timestep, nstep))
         wall = _time.perf_counter() - t0
         outcomes = []
         if traj.diverged_at is None:

@@ -71,19 +71,32 @@ def get_state(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
     return state
 
 
-def simulate(model: mujoco.MjModel, data: mujoco.MjData, duration: float) -> Trajectory:
+def simulate(
+    model: mujoco.MjModel, data: mujoco.MjData, duration: float, *, control: np.ndarray | None = None
+) -> Trajectory:
     """Step `model` from the state in `data` for ``round(duration / timestep)`` steps.
 
     `data` is left at the initial state (rollout works on its own copy of the state).
 
+    Parameters
+    ----------
+    control : ndarray, shape (nstep, nu), optional
+        Open-loop actuator controls, one row per step (e.g. a force pulse); zero controls if None.
+
     Raises
     ------
     ValueError
-        See `steps_for`.
+        See `steps_for`; or if `control` has the wrong shape.
     """
     nstep = steps_for(duration, model.opt.timestep)
     state0 = get_state(model, data)
-    states, _ = rollout.rollout(model, data, state0[None], nstep=nstep)
+    kwargs = {}
+    if control is not None:
+        control = np.asarray(control, dtype=float)
+        if control.shape != (nstep, model.nu):
+            raise ValueError(f"control has shape {control.shape}, expected ({nstep}, {model.nu})")
+        kwargs["control"] = control[None]
+    states, _ = rollout.rollout(model, data, state0[None], nstep=nstep, **kwargs)
     states = np.concatenate([state0[None], states[0]])
     return split_states(model, states)
 
