@@ -313,10 +313,12 @@ class HeavyTop:
         """u1 <= u2 <= u3."""
         return tuple(self.u0 - w for w in self.w_roots)
 
-    def theta_at_w(self, w: float) -> float:
-        """theta (rad) at u = u0 - w."""
+    def theta_at_w(self, w: float | np.ndarray) -> float | np.ndarray:
+        """theta (rad) at u = u0 - w (scalar or array)."""
         # sin^2(theta) = 1 - u^2 = sin^2(theta0) + 2 u0 w - w^2, without cancellation near theta = 0
-        return float(np.arctan2(np.sqrt(max(self.sin2_tilt + 2 * self.u0 * w - w * w, 0.0)), self.u0 - w))
+        w = np.asarray(w, dtype=float)
+        theta = np.arctan2(np.sqrt(np.maximum(self.sin2_tilt + 2 * self.u0 * w - w * w, 0.0)), self.u0 - w)
+        return float(theta) if theta.ndim == 0 else theta
 
     @property
     def theta_min(self) -> float:

@@ -10,6 +10,7 @@ at t = 0, so the initial body rates are (theta_dot, phi_dot sin(theta), omega3).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -387,11 +388,18 @@ class HeavyTopEnv(RotorEnv):
     scenario_cls = HeavyTop
     max_torque = 0.05
 
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        quat = self.data.qpos[:4]
-        e3 = frames.quat_to_matrix(quat)[:, 2]
-        theta = float(np.arctan2(np.hypot(e3[0], e3[1]), e3[2]))
+    observables = ("theta",)
+
+    def _theory(self, t: np.ndarray) -> np.ndarray:
         top = self.prediction["_theory"]
-        w = float(top.w(np.array([self.data.time]))[0])
-        theta_theory = top.theta_at_w(w)
-        return abs(theta - theta_theory) / np.pi, {"theta": theta}, {"theta": theta_theory}
+        return top.theta_at_w(top.w(t))[:, None]
+
+    def _measure(self, obs: np.ndarray) -> tuple[float]:
+        # body z-axis in the world: e3 = (2(xz + wy), 2(yz - wx), 1 - 2(x^2 + y^2)) for a unit quaternion,
+        # so sin(theta) = |(e3x, e3y)| = 2 sqrt((x^2 + y^2)(w^2 + z^2)).
+        w, x, y, z = obs[:4].tolist()
+        r2 = x * x + y * y
+        return (math.atan2(2.0 * math.sqrt(r2 * (w * w + z * z)), 1.0 - 2.0 * r2),)
+
+    def _deviation(self, measured: tuple[float], predicted: np.ndarray) -> float:
+        return abs(measured[0] - float(predicted[0])) / math.pi

@@ -30,6 +30,7 @@ def test_zero_action_tracks_theory_and_reports_it(env_id):
     """Zero action is the textbook problem: the reward (-deviation from theory) stays tiny at reference."""
     env = gym.make(env_id)
     _obs, info = env.reset(seed=0)
+    assert info["params"] and info["settings"]["mujoco"] and info["case"]  # the run's record, at reset
     worst = 0.0
     for _ in range(50):
         _obs, reward, terminated, truncated, info = env.step(np.zeros(env.action_space.shape))
@@ -39,7 +40,7 @@ def test_zero_action_tracks_theory_and_reports_it(env_id):
         if truncated:
             break
     assert worst < 1e-6
-    assert info["measured"] and info["predicted"] and info["params"] and info["settings"]["mujoco"]
+    assert info["measured"].keys() == info["predicted"].keys() == set(env.unwrapped.observables)
     env.close()
 
 
