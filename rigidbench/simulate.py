@@ -96,8 +96,10 @@ def simulate(
         if control.shape != (nstep, model.nu):
             raise ValueError(f"control has shape {control.shape}, expected ({nstep}, {model.nu})")
         kwargs["control"] = control[None]
-    states, _ = rollout.rollout(model, data, state0[None], nstep=nstep, **kwargs)
-    states = np.concatenate([state0[None], states[0]])
+    # Row 0 is the initial state; rollout writes the nstep states after it in place (no copy afterwards).
+    states = np.empty((nstep + 1, state0.size))
+    states[0] = state0
+    rollout.rollout(model, data, state0[None], nstep=nstep, state=states[None, 1:], **kwargs)
     return split_states(model, states)
 
 
