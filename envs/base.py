@@ -132,7 +132,8 @@ class ScenarioEnv(gym.Env):
         if action.shape != self.action_space.shape:
             raise ValueError(f"action shape {action.shape} != {self.action_space.shape}")
         # Fast path: every component inside [low, high] (NaN fails the comparison and takes the slow path).
-        for lo, v, hi in zip(self._action_low, action.tolist(), self._action_high):
+        # (zip's strict= keyword alone costs ~0.3 us a call; the shape was checked above.)
+        for lo, v, hi in zip(self._action_low, action.tolist(), self._action_high):  # noqa: B905
             if not lo <= v <= hi:
                 if not np.isfinite(action).all():
                     raise ValueError(f"action {action} is not finite")
@@ -217,8 +218,8 @@ class ScenarioEnv(gym.Env):
             )
         return {
             "time": self.data.time,
-            "measured": dict(zip(names, measured_values)),
-            "predicted": dict(zip(names, predicted_values)),
+            "measured": dict(zip(names, measured_values)),  # noqa: B905 (lengths checked above)
+            "predicted": dict(zip(names, predicted_values)),  # noqa: B905
             "deviation": deviation,
             "reward_deviation": -deviation,
             "diverged": False,
