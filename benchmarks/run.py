@@ -1,0 +1,518 @@
+"""rigidbench's speed, every figure next to its peer, measured in one process on one machine in one run (issue 8).
+
+    python benchmarks/run.py                 # the full table (a few minutes on 2 cores), JSON in results/bench.json
+    python benchmarks/run.py --quick         # tiny budget, seconds: what tests/test_benchmarks.py runs
+
+Figures and their peers:
+
+1. ``env.step`` throughput (frame_skip 1) of every registered rigidbench env vs gymnasium's
+   ``InvertedPendulum-v5``, both made with ``gym.make`` (the wrappers a user gets); beside each, the physics
+   floor: raw ``mj_step`` on the same model and state, in C, so ``step - floor`` is the per-step Python cost.
+2. The validation runner: steps/s inside ``Scenario.run`` (resolve, compile, predict, simulate, measure: the
+   whole case) vs a raw ``mujoco.rollout`` of the same model, settings, initial state, controls and steps.
+3. Cross-section throughput: hard-sphere collisions per second with 1 and 2 rollout threads.
+4. Wall time of ``rigidbench run`` (default targets; the thorough profile if there is one) vs its targets,
+   with the in-process physics floor (raw rollouts of the same cases) beside it; start-up vs ``import mujoco``.
+5. Headless render frames per second at 480x480 vs a bare ``mujoco.Renderer`` and ``InvertedPendulum-v5``.
+
+The machine is shared and noisy: every comparison interleaves the contenders in short blocks, repeats, and
+reports the median of the per-repeat ratios (each ratio taken between blocks run back to back), so load that
+comes and goes hits both sides. The load average is recorded with the results.
+"""
+
+# ruff: noqa: E402 (MUJOCO_GL must be set before mujoco is first imported)
+from __future__ import annotations
+
+import os
+
+# Headless rendering: the same default as `import rigidbench`, which comes after gymnasium and mujoco here.
+if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
+    os.environ["MUJOCO_GL"] = "egl"
+
+import argparse
+import json
+import pathlib
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from typing import Any
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+import rigidbench
+from rigidbench import registry
+from rigidbench.settings import PROFILES
+from rigidbench.simulate import STATE, get_state
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+PEER_ENV = "InvertedPendulum-v5"
+
+
+# ---- timing --------------------------------------------------------------------------------------------------
+
+
+def interleaved(blocks: dict[str, Callable[[], float]], repeats: int) -> dict[str, list[float]]:
+    """Run each block once per repeat, contenders back to back; each block returns its own elapsed seconds."""
+    out: dict[str, list[float]] = {name: [] for name in blocks}
+    for _ in range(repeats):
+        for name, block in blocks.items():
+            out[name].append(block())
+    return out
+
+
+def paired_ratio(numerator: list[float], denominator: list[float]) -> float:
+    """Median over repeats of numerator[i] / denominator[i] (blocks run back to back in repeat i)."""
+    return statistics.median(a / b for a, b in zip(numerator, denominator, strict=True))
+
+
+def row(
+    section: str,
+    figure: str,
+    value: float,
+    unit: str,
+    peer: str = "",
+    peer_value: float | None = None,
+    ratio: float | None = None,
+    target: str = "",
+    met: bool | None = None,
+    **extra: Any,
+) -> dict[str, Any]:
+    return {
+        "section": section,
+        "figure": figure,
+        "value": value,
+        "unit": unit,
+        "peer": peer,
+        "peer_value": peer_value,
+        "ratio": ratio,
+        "target": target,
+        "met": met,
+        **extra,
+    }
+
+
+# ---- 1. env.step ---------------------------------------------------------------------------------------------
+
+
+def _step_block(env: gym.Env, n: int) -> Callable[[], float]:
+    """n zero-action steps; resets (when an episode ends) are timed and taken out."""
+    action = np.zeros(env.action_space.shape)
+    step, reset = env.step, env.reset
+
+    def block() -> float:
+        resets = 0.0
+        t0 = time.perf_counter()
+        for _ in range(n):
+            _, _, terminated, truncated, _ = step(action)
+            if terminated or truncated:
+                r0 = time.perf_counter()
+                reset()
+                resets += time.perf_counter() - r0
+        return time.perf_counter() - t0 - resets
+
+    return block
+
+
+def _physics_block(model: mujoco.MjModel, state0: np.ndarray, n: int, chunk: int = 20) -> Callable[[], float]:
+    """n raw mj_step calls (in C, `chunk` at a time) from the env's reset state: the physics floor of a step.
+
+    Restarting every `chunk` steps keeps each model in the regime its env steps in (the inverted pendulum
+    never falls onto its joint limits).
+    """
+    data = mujoco.MjData(model)
+
+    def block() -> float:
+        t0 = time.perf_counter()
+        for _ in range(n // chunk):
+            mujoco.mj_setState(model, data, state0, STATE)
+            mujoco.mj_step(model, data, nstep=chunk)
+        return time.perf_counter() - t0
+
+    return block
+
+
+def bench_env_step(quick: bool) -> list[dict[str, Any]]:
+    n, repeats = (200, 3) if quick else (2000, 15)
+    env_ids = [PEER_ENV, *sorted(registry.env_classes())]
+    blocks, physics, about = {}, {}, {}
+    for env_id in env_ids:
+        env = gym.make(env_id, frame_skip=1)
+        env.reset(seed=0)
+        inner = env.unwrapped
+        model = inner.model
+        about[env_id] = (
+            f"{mujoco.mjtIntegrator(model.opt.integrator).name.removeprefix('mjINT_')} "
+            f"dt={model.opt.timestep:g} nq={model.nq} nv={model.nv}"
+        )
+        blocks[env_id] = _step_block(env, n)
+        physics[env_id] = _physics_block(model, get_state(model, inner.data), n)
+        blocks[env_id]()  # warm-up: the env checker's first-call checks, caches
+    times = interleaved({**blocks, **{f"physics {k}": v for k, v in physics.items()}}, repeats)
+    peer = times[PEER_ENV]
+    rows = []
+    for env_id in env_ids:
+        step_us = statistics.median(times[env_id]) / n * 1e6
+        floor_us = statistics.median(times[f"physics {env_id}"]) / n * 1e6
+        extra = {"physics_us": floor_us, "overhead_us": step_us - floor_us, "model": about[env_id]}
+        if env_id == PEER_ENV:
+            rows.append(row("env.step", f"{env_id} env.step (peer)", n / statistics.median(peer), "steps/s", **extra))
+            continue
+        ratio = paired_ratio(peer, times[env_id])
+        rows.append(
+            row(
+                "env.step",
+                f"{env_id} env.step",
+                n / statistics.median(times[env_id]),
+                "steps/s",
+                PEER_ENV,
+                n / statistics.median(peer),
+                ratio,
+                ">= 1.5x",
+                ratio >= 1.5,
+                **extra,
+            )
+        )
+    return rows
+
+
+# ---- 2. validation runner vs raw rollout ---------------------------------------------------------------------
+
+
+def _jobs(quick: bool) -> list[tuple[Any, str]]:
+    if quick:
+        scenario = registry.get("heavy-top")
+        return [(scenario, "nutation")]
+    return [(s, c.name) for s in registry.scenarios().values() for c in s.cases]
+
+
+def _raw_rollout(scenario: Any, case: str, nstep: int) -> float:
+    """Seconds for one rollout of `nstep` steps of the same compiled model, initial state and controls."""
+    model = scenario.build(scenario.resolve(scenario.case(case)))
+    data = scenario.start(model)
+    state0 = get_state(model, data)
+    control = scenario.control(model, model.opt.timestep, nstep)
+    kwargs = {} if control is None else {"control": control[None]}
+    t0 = time.perf_counter()
+    rollout.rollout(model, data, state0[None], nstep=nstep, **kwargs)
+    return time.perf_counter() - t0
+
+
+def bench_runner(quick: bool) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+    repeats = 1 if quick else 3
+    per_case: dict[str, dict[str, list[float]]] = {}
+    nsteps: dict[str, int] = {}
+    for _ in range(repeats):
+        for scenario, case in _jobs(quick):
+            name = f"{scenario.slug}:{case}"
+            t0 = time.perf_counter()
+            run = scenario.run(case)
+            t_run = time.perf_counter() - t0
+            nsteps[name] = run.nstep
+            t_raw = _raw_rollout(scenario, case, run.nstep)
+            times = per_case.setdefault(name, {"run": [], "raw": []})
+            times["run"].append(t_run)
+            times["raw"].append(t_raw)
+    total_steps = sum(nsteps.values())
+    run_totals = [sum(t["run"][i] for t in per_case.values()) for i in range(repeats)]
+    raw_totals = [sum(t["raw"][i] for t in per_case.values()) for i in range(repeats)]
+    ratio = paired_ratio(raw_totals, run_totals)
+    rows = [
+        row(
+            "runner",
+            f"Scenario.run, {len(per_case)} case(s), physics steps/s",
+            total_steps / statistics.median(run_totals),
+            "steps/s",
+            "raw mujoco.rollout, same models",
+            total_steps / statistics.median(raw_totals),
+            ratio,
+            ">= 0.80",
+            ratio >= 0.8,
+        )
+    ]
+    worst = min(per_case, key=lambda k: paired_ratio(per_case[k]["raw"], per_case[k]["run"]))
+    w = per_case[worst]
+    rows.append(
+        row(
+            "runner",
+            f"  worst case: {worst} ({nsteps[worst]} steps)",
+            nsteps[worst] / statistics.median(w["run"]),
+            "steps/s",
+            "raw mujoco.rollout",
+            nsteps[worst] / statistics.median(w["raw"]),
+            paired_ratio(w["raw"], w["run"]),
+        )
+    )
+    cases = {
+        name: {
+            "nstep": nsteps[name],
+            "run_s": statistics.median(t["run"]),
+            "raw_s": statistics.median(t["raw"]),
+            "ratio": paired_ratio(t["raw"], t["run"]),
+        }
+        for name, t in per_case.items()
+    }
+    floor = {"raw_rollout_s": statistics.median(raw_totals), "scenario_run_s": statistics.median(run_totals)}
+    return rows, {"cases": cases, **floor}
+
+
+# ---- 3. cross-section ----------------------------------------------------------------------------------------
+
+
+def bench_cross_section(quick: bool) -> list[dict[str, Any]]:
+    if "cross-section" not in registry.scenarios():
+        return [row("cross-section", "collisions/s (cross-section scenario not on this branch)", float("nan"), "1/s")]
+    raise NotImplementedError  # filled in when the cross-section scenario lands
+
+
+# ---- 4. wall time of the command line ------------------------------------------------------------------------
+
+
+def _wall(args: list[str]) -> float:
+    t0 = time.perf_counter()
+    subprocess.run(args, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return time.perf_counter() - t0
+
+
+def bench_cli(quick: bool, floor: dict[str, Any], thorough: bool) -> list[dict[str, Any]]:
+    py = sys.executable
+    repeats = 3 if quick else 5
+    starts = interleaved(
+        {
+            "rigidbench --version": lambda: _wall([py, "-m", "rigidbench", "--version"]),
+            "import mujoco": lambda: _wall([py, "-c", "import mujoco"]),
+        },
+        repeats,
+    )
+    rows = [
+        row(
+            "cli",
+            "start-up: rigidbench --version",
+            statistics.median(starts["rigidbench --version"]),
+            "s",
+            "python -c 'import mujoco'",
+            statistics.median(starts["import mujoco"]),
+            paired_ratio(starts["rigidbench --version"], starts["import mujoco"]),
+        )
+    ]
+    targets = ["heavy-top:nutation"] if quick else []
+    wall = _wall([py, "-m", "rigidbench", "run", "--quiet", *targets])
+    what = "rigidbench run " + (" ".join(targets) if targets else "(default targets)")
+    rows.append(
+        row(
+            "cli",
+            f"{what}, wall",
+            wall,
+            "s",
+            "in-process: sum of Scenario.run / raw rollouts (same cases)",
+            floor["scenario_run_s"],
+            floor["raw_rollout_s"] / wall,
+            "<= 60 s",
+            wall <= 60,
+            raw_rollout_s=floor["raw_rollout_s"],
+        )
+    )
+    if thorough and "thorough" in PROFILES:
+        wall = _wall([py, "-m", "rigidbench", "run", "--quiet", "--profile", "thorough"])
+        rows.append(
+            row("cli", "rigidbench run --profile thorough, wall", wall, "s", target="<= 600 s", met=wall <= 600)
+        )
+    return rows
+
+
+# ---- 5. rendering --------------------------------------------------------------------------------------------
+
+
+def _render_block(render: Callable[[], Any], before: Callable[[], Any], n: int) -> Callable[[], float]:
+    def block() -> float:
+        elapsed = 0.0
+        for _ in range(n):
+            before()
+            t0 = time.perf_counter()
+            render()
+            elapsed += time.perf_counter() - t0
+        return elapsed
+
+    return block
+
+
+def bench_render(quick: bool) -> list[dict[str, Any]]:
+    n, repeats = (5, 2) if quick else (60, 7)
+    size = {"width": 480, "height": 480}
+    env_id = registry.get("heavy-top").env_id
+    try:
+        ours = gym.make(env_id, render_mode="rgb_array", **size)
+        peer = gym.make(PEER_ENV, render_mode="rgb_array", **size)
+    except Exception as exc:  # no OpenGL backend
+        return [row("render", f"render 480x480 ({type(exc).__name__}: {exc})", float("nan"), "frames/s")]
+    ours.reset(seed=0)
+    peer.reset(seed=0)
+    inner = ours.unwrapped
+    # The peer: a bare mujoco.Renderer on the model as its file compiles (MuJoCo's own render settings).
+    scenario = inner.scenario
+    bare = mujoco.Renderer(scenario.build(scenario.resolve(scenario.case(None))), 480, 480)
+    zero, zero_peer = np.zeros(ours.action_space.shape), np.zeros(peer.action_space.shape)
+
+    def bare_render():
+        bare.update_scene(inner.data, camera="side")
+        return bare.render()
+
+    def step_peer():
+        if peer.step(zero_peer)[2]:
+            peer.reset()
+
+    blocks = {
+        "ours": _render_block(ours.render, lambda: ours.step(zero), n),
+        "bare": _render_block(bare_render, lambda: ours.step(zero), n),
+        "peer": _render_block(peer.render, step_peer, n),
+    }
+    for block in blocks.values():
+        block()  # warm-up: GL context, textures
+    times = interleaved(blocks, repeats)
+    fps = {k: n / statistics.median(v) for k, v in times.items()}
+    rows = [
+        row(
+            "render",
+            f"{env_id} render 480x480",
+            fps["ours"],
+            "frames/s",
+            "bare mujoco.Renderer, same model file",
+            fps["bare"],
+            paired_ratio(times["bare"], times["ours"]),
+        ),
+        row(
+            "render",
+            f"{env_id} render 480x480",
+            fps["ours"],
+            "frames/s",
+            f"{PEER_ENV} render 480x480",
+            fps["peer"],
+            paired_ratio(times["peer"], times["ours"]),
+        ),
+    ]
+    bare.close()
+    ours.close()
+    peer.close()
+    return rows
+
+
+# ---- table, JSON, main ---------------------------------------------------------------------------------------
+
+
+def _fmt(x: Any) -> str:
+    if x is None:
+        return ""
+    if isinstance(x, bool):
+        return "yes" if x else "NO"
+    if isinstance(x, float):
+        if np.isnan(x):
+            return "n/a"
+        return f"{x:.3g}" if abs(x) < 1e4 else f"{x:.3e}"
+    return str(x)
+
+
+def table(rows: list[dict[str, Any]]) -> str:
+    cols = [("figure", "figure"), ("value", "value"), ("unit", "unit"), ("peer", "peer"), ("peer_value", "peer value")]
+    cols += [("ratio", "ratio"), ("target", "target"), ("met", "met")]
+    cells = [[_fmt(r[key]) for key, _ in cols] for r in rows]
+    widths = [max(len(title), *(len(c[i]) for c in cells)) for i, (_, title) in enumerate(cols)]
+    lines = ["  ".join(title.ljust(w) for (_, title), w in zip(cols, widths, strict=True))]
+    lines.append("  ".join("-" * w for w in widths))
+    lines += ["  ".join(c.ljust(w) for c, w in zip(cell, widths, strict=True)).rstrip() for cell in cells]
+    return "\n".join(lines)
+
+
+def env_step_detail(rows: list[dict[str, Any]]) -> str:
+    lines = ["env.step per step (us): total = physics floor (raw mj_step, same model) + per-step Python"]
+    for r in rows:
+        if "physics_us" in r:
+            total = r["physics_us"] + r["overhead_us"]
+            lines.append(
+                f"  {r['figure'].removesuffix(' env.step').removesuffix(' (peer)'):<40} {total:6.2f} = "
+                f"{r['physics_us']:5.2f} + {r['overhead_us']:5.2f}   [{r['model']}]"
+            )
+    return "\n".join(lines)
+
+
+def _finite(x: Any) -> Any:
+    """NaN (a figure that could not be taken) as JSON null."""
+    if isinstance(x, float) and np.isnan(x):
+        return None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_finite(v) for v in x]
+    return x
+
+
+def machine() -> dict[str, Any]:
+    import gymnasium
+
+    return {
+        "load_average": os.getloadavg(),
+        "cpus": os.cpu_count(),
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+        "mujoco": mujoco.__version__,
+        "numpy": np.__version__,
+        "gymnasium": gymnasium.__version__,
+        "rigidbench": rigidbench.__version__,
+        "time_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
+
+
+SECTIONS = ("env-step", "runner", "cross-section", "cli", "render")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="tiny budget (seconds): checks the script, not speed")
+    parser.add_argument("--json", default=str(ROOT / "results" / "bench.json"), metavar="PATH", help="JSON output")
+    parser.add_argument("--skip", action="append", default=[], choices=SECTIONS, help="leave out a section")
+    parser.add_argument("--no-thorough", action="store_true", help="do not time the thorough profile")
+    args = parser.parse_args(argv)
+
+    start = machine()
+    t0 = time.perf_counter()
+    rows: list[dict[str, Any]] = []
+    floor: dict[str, Any] = {"raw_rollout_s": float("nan"), "scenario_run_s": float("nan")}
+    detail: dict[str, Any] = {}
+    if "env-step" not in args.skip:
+        rows += bench_env_step(args.quick)
+    if "runner" not in args.skip:
+        runner_rows, detail = bench_runner(args.quick)
+        rows += runner_rows
+        floor = detail
+    if "cross-section" not in args.skip:
+        rows += bench_cross_section(args.quick)
+    if "cli" not in args.skip:
+        rows += bench_cli(args.quick, floor, thorough=not (args.quick or args.no_thorough))
+    if "render" not in args.skip:
+        rows += bench_render(args.quick)
+    end = machine()
+
+    print(table(rows))
+    if "env-step" not in args.skip:
+        print()
+        print(env_step_detail(rows))
+    load = " / ".join(f"{x:.2f}" for x in start["load_average"])
+    print(
+        f"\nmujoco {start['mujoco']}, python {start['python']}, {start['cpus']} CPUs; load average (1/5/15 min) "
+        f"{load} at the start, {' / '.join(f'{x:.2f}' for x in end['load_average'])} at the end; "
+        f"{time.perf_counter() - t0:.0f} s{' (--quick: not a measurement)' if args.quick else ''}"
+    )
+    out = pathlib.Path(args.json)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    record = {"quick": args.quick, "machine": start, "machine_end": end, "rows": rows, "runner_cases": detail}
+    out.write_text(json.dumps(_finite(record), indent=1))
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
