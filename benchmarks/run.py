@@ -281,7 +281,7 @@ def _wall(args: list[str]) -> float:
 
 def bench_cli(quick: bool, floor: dict[str, Any], thorough: bool) -> list[dict[str, Any]]:
     py = sys.executable
-    repeats = 3 if quick else 5
+    repeats = 1 if quick else 5
     starts = interleaved(
         {
             "rigidbench --version": lambda: _wall([py, "-m", "rigidbench", "--version"]),
@@ -346,10 +346,14 @@ def bench_render(quick: bool) -> list[dict[str, Any]]:
     size = {"width": 480, "height": 480}
     env_id = registry.get("heavy-top").env_id
     try:
-        ours = gym.make(env_id, render_mode="rgb_array", **size)
-        peer = gym.make(PEER_ENV, render_mode="rgb_array", **size)
-    except Exception as exc:  # no OpenGL backend
+        return _bench_render(env_id, n, repeats, size)
+    except Exception as exc:  # no OpenGL backend (mujoco.FatalError, GLFW/EGL errors)
         return [row("render", f"render 480x480 ({type(exc).__name__}: {exc})", float("nan"), "frames/s")]
+
+
+def _bench_render(env_id: str, n: int, repeats: int, size: dict[str, int]) -> list[dict[str, Any]]:
+    ours = gym.make(env_id, render_mode="rgb_array", **size)
+    peer = gym.make(PEER_ENV, render_mode="rgb_array", **size)
     ours.reset(seed=0)
     peer.reset(seed=0)
     inner = ours.unwrapped
