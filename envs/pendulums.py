@@ -177,13 +177,14 @@ def springs(model: mujoco.MjModel) -> Springs:
 def row_energy(model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
     """Total energy (J) of side-by-side pendulums with springs, from the full nonlinear geometry.
 
-    ``sum 1/2 I_O th'^2 + sum m g l (1 - cos th) + sum 1/2 k (L - L0)^2``, with L the distance between the
+    ``sum 1/2 I_O th'^2 + sum m g l (1 - cos th) + sum 1/2 k (L - L0)^2`` (1 - cos th written 2 sin^2(th/2):
+    no cancellation at milliradian amplitudes), with L the distance between the
     attachment points ``(x_i - d sin th_i, -d cos th_i)`` (not MuJoCo's energy: computed independently).
     """
     pend = pendulums(model)
     g = gravity(model)
     energy = sum(
-        0.5 * p.inertia_pivot * qvel[:, i] ** 2 + p.mass * g * p.length * (1 - np.cos(qpos[:, i]))
+        0.5 * p.inertia_pivot * qvel[:, i] ** 2 + 2 * p.mass * g * p.length * np.sin(0.5 * qpos[:, i]) ** 2
         for i, p in enumerate(pend)
     )
     sp = springs(model)
