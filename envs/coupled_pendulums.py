@@ -119,8 +119,8 @@ class CoupledPendulums(Scenario):
             positive(100.0),
             SpringHeight(),
         ),
-        Param("amplitude1", "rad", "release angle of pendulum 1 (at rest)", Range(-0.1, 0.1), Numeric("amplitude1")),
-        Param("amplitude2", "rad", "release angle of pendulum 2 (at rest)", Range(-0.1, 0.1), Numeric("amplitude2")),
+        Param("amplitude1", "rad", "release angle of pendulum 1 (at rest)", Range(-1.0, 1.0), Numeric("amplitude1")),
+        Param("amplitude2", "rad", "release angle of pendulum 2 (at rest)", Range(-1.0, 1.0), Numeric("amplitude2")),
         Param("g", "m/s^2", "gravitational acceleration (along -z)", positive(1e3), Gravity()),
     )
     cases = (

@@ -113,6 +113,38 @@ class SpringStiffness:
         return float(model.tendon_stiffness[0])
 
 
+@dataclass(frozen=True)
+class ChainSize:
+    """Number n of pendulums in a row: builds the chain through `MjSpec` from the one-pendulum template.
+
+    The model file holds a single pendulum body ``pendulum`` (joint ``hinge``, sites ``bob`` and ``spring``) and
+    the default class ``spring``. `apply` attaches n copies of it, ``pendulum1`` ... ``pendulum<n>``, spaced
+    ``spacing`` (a ``<numeric>``, m) apart along x and centred on the origin, deletes the template, and joins each
+    neighbouring pair's ``spring`` sites by a spatial tendon ``coupling<i>`` of class ``spring``. It must be
+    applied before the other targets of the family (first in ``params``), which then set every copy.
+    """
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        n = round(float(value))
+        template = spec.body(BODY)
+        spacing = float(spec.numeric("spacing").data[0])
+        spec.copy_during_attach = True  # attach copies of the template, not the template itself (write-only flag)
+        for i in range(1, n + 1):
+            frame = spec.worldbody.add_frame(pos=[(i - 1 - (n - 1) / 2) * spacing, 0.0, 0.0])
+            frame.attach_body(template, "", str(i))
+        spec.delete(template)
+        for i in range(1, n):
+            tendon = spec.add_tendon(default=spec.find_default("spring"), name=f"coupling{i}")
+            tendon.wrap_site(f"{SPRING_SITE}{i}")
+            tendon.wrap_site(f"{SPRING_SITE}{i + 1}")
+        width = n * spacing + 0.5  # the view (fovy 45 deg, square) is 0.83 x the camera's distance wide
+        spec.camera("side").pos = [0.0, -max(2.8, 1.3 * width), spec.camera("side").pos[2]]
+        spec.geom("backdrop").size = [max(4.0, width), max(2.0, 0.6 * width), 0.01]
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(model.njnt)
+
+
 def _first_pendulum(model: mujoco.MjModel) -> str:
     return next(model.body(i).name for i in range(model.nbody) if model.body(i).name.startswith(BODY))
 
@@ -231,6 +263,16 @@ def modal_amplitudes(t: np.ndarray, angles: np.ndarray, omegas: Iterable[float],
     coef, *_ = np.linalg.lstsq(basis, angles[::stride], rcond=None)
     m = len(omegas)
     return (coef[:m] + 1j * coef[m:]).T
+
+
+def sinusoid_residual(t: np.ndarray, q: np.ndarray, omega: float, stride: int = 10) -> float:
+    """max |q - (A cos(omega t) + B sin(omega t))| / sqrt(A^2 + B^2) for the least-squares A, B (NaN if omega is)."""
+    if not np.isfinite(omega):
+        return float("nan")
+    ts, qs = t[::stride], q[::stride]
+    basis = np.stack([np.cos(omega * ts), np.sin(omega * ts)], axis=-1)
+    coef, *_ = np.linalg.lstsq(basis, qs, rcond=None)
+    return float(np.abs(qs - basis @ coef).max() / np.hypot(*coef))
 
 
 def mode_shape(z: np.ndarray) -> np.ndarray:
