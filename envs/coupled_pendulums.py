@@ -226,7 +226,7 @@ class CoupledPendulums(Scenario):
             "omega-anti-phase": omegas[1],
             "shape-in-phase": shapes.get(0, np.nan),
             "shape-anti-phase": shapes.get(1, np.nan),
-            "transfer-time": transfer_time(t, theta[:, 1], traj.qvel[:, 1]),
+            "transfer-time": transfer_time(t, theta[:, 1], traj.qvel[:, 1], before=2 * prediction["transfer-time"]),
             "beat-waveform": float(np.abs(theta - linear).max() / prediction["_scale"]),
             "energy-drift": pendulums.energy_drift(
                 pendulums.row_energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]
@@ -234,8 +234,11 @@ class CoupledPendulums(Scenario):
         }
 
 
-def transfer_time(t: np.ndarray, angle2: np.ndarray, rate2: np.ndarray) -> float:
+def transfer_time(t: np.ndarray, angle2: np.ndarray, rate2: np.ndarray, *, before: float = np.inf) -> float:
     """First time (s) pendulum 2's swing is largest, from the peaks of |th2| (O4's T_x).
+
+    Only the peaks before `before` (s) count: the envelope peaks again at 3 T_x, 5 T_x, ..., so the caller
+    passes a window ending near the envelope's first zero (2 T_x predicted; a window, not a bias).
 
     The extrema of th2 (zero crossings of its rate, cubic-interpolated) sample its envelope once per half
     carrier period; the vertex of a least-squares parabola through the peaks within 2 % of the largest one,
@@ -245,6 +248,7 @@ def transfer_time(t: np.ndarray, angle2: np.ndarray, rate2: np.ndarray) -> float
     from rigidbench import signals
 
     tc = signals.crossings(t, rate2)
+    tc = tc[tc < before]
     if len(tc) < 3:
         return float("nan")
     peaks = np.abs(signals.interpolate(t, angle2, tc))

@@ -200,9 +200,9 @@ class Param:
                 raise ValueError(f"parameter '{self.name}' = {value!r} is not finite")
             if x not in self.valid or (self.integer and x != round(x)):
                 kind = "integers in " if self.integer else ""
+                unit = "" if self.unit == "1" else f" {self.unit}"  # no unit printed for a pure number
                 raise ValueError(
-                    f"parameter '{self.name}' = {_fmt(value)} {self.unit} is outside the valid range "
-                    f"{kind}{self.valid} {self.unit}"
+                    f"parameter '{self.name}' = {_fmt(value)}{unit} is outside the valid range {kind}{self.valid}{unit}"
                 )
         return _unwrap(arr)
 
