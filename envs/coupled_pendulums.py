@@ -315,5 +315,5 @@ class CoupledPendulumsEnv(PendulumEnv):
 
     scenario_cls = CoupledPendulums
 
-    def _theory_angles(self, t: float) -> np.ndarray:
-        return self.prediction["_modes"].angles(np.array([t]), self.prediction["_angles0"])[0]
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        return self.prediction["_modes"].angles(t, self.prediction["_angles0"])

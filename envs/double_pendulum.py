@@ -240,6 +240,6 @@ class DoublePendulumEnv(PendulumEnv):
 
     scenario_cls = DoublePendulum
 
-    def _theory_angles(self, t: float) -> np.ndarray:
-        th = self.prediction["_modes"].angles(np.array([t]), self.prediction["_angles0"])[0]
-        return np.array([th[0], th[1] - th[0]])
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        th = self.prediction["_modes"].angles(t, self.prediction["_angles0"])
+        return np.stack([th[:, 0], th[:, 1] - th[:, 0]], axis=-1)  # hinge coordinates: hinge2 is relative

@@ -148,6 +148,6 @@ class SimplePendulumEnv(PendulumEnv):
 
     scenario_cls = Pendulum
 
-    def _theory_angles(self, t: float) -> np.ndarray:
+    def _theory(self, t: np.ndarray) -> np.ndarray:
         p = self.prediction
-        return osc.pendulum_angle(np.array([t]), p["_length_eq"], p["_g"], p["_amplitude"])
+        return osc.pendulum_angle(t, p["_length_eq"], p["_g"], p["_amplitude"])[:, None]

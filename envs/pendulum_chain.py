@@ -276,5 +276,15 @@ class PendulumChainEnv(PendulumEnv):
 
     scenario_cls = PendulumChain
 
-    def _theory_angles(self, t: float) -> np.ndarray:
-        return self.prediction["_modes"].angles(np.array([t]), self.prediction["_angles0"])[0]
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        return self.prediction["_modes"].angles(t, self.prediction["_angles0"])
+
+    def _load(self, case: str, params: Mapping[str, Any]) -> None:
+        if hasattr(self, "model"):  # the observation space is fixed at construction: so is n
+            n = self.scenario.resolve(self.scenario.case(case), params)["n"]
+            if n != self.model.njnt:
+                raise ValueError(
+                    f"parameter 'n' = {n:g} cannot differ from the env's {self.model.njnt} pendulums (the "
+                    "observation space depends on it); make a new env instead"
+                )
+        super()._load(case, params)

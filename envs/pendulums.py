@@ -15,9 +15,9 @@ l^2`` read back from the compiled model (THEORY.md O2).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import gymnasium as gym
 import mujoco
@@ -296,20 +296,26 @@ def worst(measured: np.ndarray, expected: np.ndarray, relative: bool = True) -> 
 
 class PendulumEnv(ScenarioEnv):
     """Env plumbing for hinged pendulums: observation = hinge angles and rates, action = a torque (N m) on the
-    first pendulum's hinge through ``qfrc_applied``, clipped to +-`max_torque`. Reward = minus the largest
-    deviation of an angle from the closed-form motion, divided by the amplitude scale `prediction["_scale"]`.
+    first pendulum's hinge through ``qfrc_applied``, clipped to +-`max_torque`. The observables compared with
+    theory are the hinge angles (named after their joints); the reward is minus the largest deviation of a hinge
+    angle from the closed-form motion, divided by the largest initial angle ``prediction["_scale"]``. Subclasses
+    implement `_theory`.
 
     Observation (float64, shape (2 n,), n hinges)
 
-    ======= ================================================= ====== ==========================
-    idx     quantity                                          unit   MuJoCo source
-    ======= ================================================= ====== ==========================
+    ======= ================================================== ====== ==========================
+    idx     quantity                                           unit   MuJoCo source
+    ======= ================================================== ====== ==========================
     0..n-1  hinge angle of pendulum i (relative to its parent) rad    qpos of ``hinge<i>``
-    n..2n-1 hinge rate of pendulum i                          rad/s  qvel of ``hinge<i>``
-    ======= ================================================= ====== ==========================
+    n..2n-1 hinge rate of pendulum i                           rad/s  qvel of ``hinge<i>``
+    ======= ================================================== ====== ==========================
     """
 
     max_torque: ClassVar[float] = 0.1
+
+    @property
+    def observables(self) -> tuple[str, ...]:  # one per hinge: the number depends on the model (the chain's n)
+        return tuple(self.model.joint(i).name for i in range(self.model.njnt))
 
     def _observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(2 * self.model.nq,), dtype=np.float64)
@@ -318,23 +324,13 @@ class PendulumEnv(ScenarioEnv):
         return gym.spaces.Box(-self.max_torque, self.max_torque, shape=(1,), dtype=np.float64)
 
     def _observation(self) -> np.ndarray:
-        return np.concatenate([self.data.qpos, self.data.qvel]).astype(np.float64)
+        return np.concatenate((self.data.qpos, self.data.qvel))
 
     def _apply_action(self, action: np.ndarray) -> None:
         self.data.qfrc_applied[0] = action[0]
 
-    def _load(self, case: str, params: Mapping[str, Any]) -> None:
-        nq = self.model.nq if hasattr(self, "model") else None
-        super()._load(case, params)
-        if nq is not None and self.model.nq != nq:
-            raise ValueError(f"the number of pendulums cannot change after construction ({nq} -> {self.model.nq})")
+    def _measure(self, obs: np.ndarray) -> np.ndarray:
+        return obs[: self.model.nq]
 
-    def _theory_angles(self, t: float) -> np.ndarray:
-        """The closed-form hinge angles (qpos convention) at time t; subclasses implement it."""
-        raise NotImplementedError
-
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        theta = self.data.qpos.copy()
-        theory = self._theory_angles(float(self.data.time))
-        deviation = float(np.abs(theta - theory).max() / self.prediction["_scale"])
-        return deviation, {"angles": theta}, {"angles": theory}
+    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        return float(np.abs(measured - predicted).max() / self.prediction["_scale"])
