@@ -32,7 +32,7 @@ from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
 
 _FREQ = (
-    "RK4 at dt = 1 ms: relative frequency error (omega dt)^4/120 <~ 1e-11; normal coordinates from the O7 mode "
+    "RK4 at dt = 2 ms: relative frequency error (omega dt)^4/120 <~ 2e-10; normal coordinates from the O7 mode "
     "vectors, crossings cubic-interpolated over >= 30 periods; nonlinear shift of the fast mode -1.85 a1^2 "
     "(measured, exactly quadratic in a1; the slow mode's is ~20x smaller): 1.2e-7 at a1 = 0.25 mrad"
 )
@@ -50,7 +50,8 @@ CHECKS = (
         "1",
         1e-8,
         "abs",
-        "RK4 is not symplectic: relative drift ~ T (omega dt)^6 / (72 dt) <~ 1e-10 over the run; 1e-8 leaves 2 decades",
+        "RK4 is not symplectic: relative drift ~ T (omega dt)^6 / (72 dt) <~ 2e-9 over 80 s (fast mode, omega dt = "
+        "0.012); 1e-8 leaves a factor 5",
         "O6: E = 1/2 sum m v^2 + I th'^2 + m g z conserved (relative to its initial value)",
     ),
 )
