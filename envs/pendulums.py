@@ -104,8 +104,10 @@ class SpringStiffness:
     """Spring constant k (N/m) of every tendon and of the ``spring`` default class (for tendons added later)."""
 
     def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
-        k = [float(value), 0.0, 0.0]  # linear spring: MuJoCo's higher-order stiffness coefficients stay 0
-        spec.find_default("spring").tendon.stiffness = k
+        default = spec.find_default("spring").tendon
+        # MuJoCo 4 stores a polynomial stiffness (k, k2, k3): a linear spring keeps the higher orders at 0.
+        k = [float(value)] + [0.0] * (np.size(default.stiffness) - 1) if np.ndim(default.stiffness) else float(value)
+        default.stiffness = k
         for tendon in spec.tendons:
             tendon.stiffness = k
 
