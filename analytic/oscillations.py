@@ -112,8 +112,10 @@ class NormalModes:
         return q @ self.shapes.T
 
     def shape_ratios(self) -> np.ndarray:
-        """Each mode vector divided by its first component, shape (n, n) (column r: th_j / th_1 in mode r)."""
-        return self.shapes / self.shapes[0]
+        """Each mode vector divided by its first component, shape (n, n) (column r: th_j / th_1 in mode r);
+        +-inf or NaN where pendulum 1 is (numerically) a node of the mode."""
+        with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+            return self.shapes / self.shapes[0]
 
 
 def normal_modes(inertia: np.ndarray, stiffness: np.ndarray) -> NormalModes:

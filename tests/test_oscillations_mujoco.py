@@ -162,3 +162,53 @@ def test_envs_track_theory_with_zero_action_and_take_a_torque_on_pendulum_1():
         env.step(np.ones(1))  # clipped to 0.1 N m on pendulum 1 only
         assert env.data.qfrc_applied[0] == 0.1 and not env.data.qfrc_applied[1:].any()
         env.close()
+
+
+# ---- sweeps (slow) -------------------------------------------------------------------------------------------
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("n", [2, 3, 4, 6, 8, 10, 12, 20, 40])
+def test_chain_matches_theory_for_every_size(n):
+    for case in ("end-released", "strong-coupling"):
+        run = registry.get("pendulum-chain").run(case, {"n": n})
+        assert all(o.passed for o in run.outcomes), [(o.check.name, o.error) for o in run.outcomes]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "slug, case, params",
+    [
+        ("coupled-pendulums", "beats", {"mass": 0.2, "length": 0.5, "k": 0.3, "d": 0.25}),
+        ("coupled-pendulums", "anti-phase", {"mass": 3.0, "length": 2.0, "k": 50.0, "d": 2.0, "g": 1.62}),
+        ("pendulum-chain", "end-released", {"n": 9, "mass": 0.5, "length": 0.3, "k": 2.0, "d": 0.1}),
+        ("double-pendulum", "released", {"mass1": 2.0, "mass2": 0.1, "length1": 0.4, "length2": 1.5}),
+        ("double-pendulum", "fast-mode", {"mass1": 0.5, "mass2": 1.0, "length1": 1.0, "length2": 0.5}),
+        ("pendulum", "near-inverted", {"length": 0.05, "g": 3.7}),
+    ],
+)
+def test_predictions_follow_the_parameters_actually_simulated(slug, case, params):
+    run = registry.get(slug).run(case, params)
+    assert all(run.params[k] == pytest.approx(v, rel=1e-15) for k, v in params.items())
+    assert all(o.passed for o in run.outcomes), [(o.check.name, o.error) for o in run.outcomes]
+
+
+@pytest.mark.slow
+def test_checks_fail_for_their_stated_reasons_outside_their_validity():
+    """A heavy bob under a light one (m1 = 0.1, m2 = 2 kg, l1 = 1.5, l2 = 0.4 m): the fast mode is at 25 rad/s with
+    th2/th1 = -3.9. At the default 0.25 mrad the nonlinear shift (7.7e-6) fails the frequency check, and at
+    omega dt = 0.05 RK4's energy error (9e-7) fails the energy check; a 10x smaller amplitude fixes the first,
+    a 4x smaller step the second, as the tolerance reasons say."""
+    scenario = registry.get("double-pendulum")
+    params = {"mass1": 0.1, "mass2": 2.0, "length1": 1.5, "length2": 0.4}
+
+    def errors(extra, settings=None):
+        run = scenario.run("fast-mode", {**params, **extra}, settings)
+        return {o.check.name: o for o in run.outcomes}
+
+    from rigidbench.settings import Settings
+
+    base = errors({})
+    assert not base["omega-fast"].passed and not base["energy-drift"].passed
+    assert errors({"amplitude1": 2.5e-5})["omega-fast"].passed
+    assert errors({}, Settings(timestep=5e-4))["energy-drift"].passed
