@@ -203,6 +203,7 @@ class ScenarioEnv(gym.Env):
         self.episode_duration = float(self.scenario.duration(self._prediction))
         self._settings_record = read_settings(self.model)
         self._half_timestep = 0.5 * self.model.opt.timestep
+        self._observable_names = tuple(self.observables)  # may be a property of the model: read once, not per step
         self._case = case
         # Theory on the env's time grid, evaluated once (vectorised) so a step costs a table lookup.
         self._env_dt = env_dt = self.model.opt.timestep * self.frame_skip
@@ -216,7 +217,7 @@ class ScenarioEnv(gym.Env):
         predicted = table[k] if k < len(table) else self._theory(np.array([self.data.time]))[0]
         measured = self._measure(obs)
         deviation = self._deviation(measured, predicted)
-        names = self.observables
+        names = self._observable_names
         measured_values = _float_list(measured)
         predicted_values = predicted.tolist()
         if not len(names) == len(measured_values) == len(predicted_values):
