@@ -76,7 +76,7 @@ def simulate(
 ) -> Trajectory:
     """Step `model` from the state in `data` for ``round(duration / timestep)`` steps.
 
-    `data` is left at the initial state (rollout works on its own copy of the state).
+    `data` is rollout's scratch space: it is left at the last state, not the initial one.
 
     Parameters
     ----------
