@@ -33,11 +33,13 @@ import argparse
 import json
 import pathlib
 import platform
+import resource
 import statistics
 import subprocess
 import sys
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
@@ -57,18 +59,43 @@ PEER_ENV = "InvertedPendulum-v5"
 # ---- timing --------------------------------------------------------------------------------------------------
 
 
-def interleaved(blocks: dict[str, Callable[[], float]], repeats: int) -> dict[str, list[float]]:
-    """Run each block once per repeat, contenders back to back; each block returns its own elapsed seconds."""
-    out: dict[str, list[float]] = {name: [] for name in blocks}
+@dataclass(frozen=True)
+class Lap:
+    """Elapsed wall-clock and CPU seconds (CPU time of this process: less sensitive to a loaded machine)."""
+
+    wall: float
+    cpu: float
+
+    def __add__(self, other: Lap) -> Lap:
+        return Lap(self.wall + other.wall, self.cpu + other.cpu)
+
+    def __sub__(self, other: Lap) -> Lap:
+        return Lap(self.wall - other.wall, self.cpu - other.cpu)
+
+
+ZERO = Lap(0.0, 0.0)
+
+
+def now() -> Lap:
+    return Lap(time.perf_counter(), time.process_time())
+
+
+def interleaved(blocks: dict[str, Callable[[], Lap]], repeats: int) -> dict[str, list[Lap]]:
+    """Run each block once per repeat, contenders back to back; each block returns its own elapsed time."""
+    out: dict[str, list[Lap]] = {name: [] for name in blocks}
     for _ in range(repeats):
         for name, block in blocks.items():
             out[name].append(block())
     return out
 
 
-def paired_ratio(numerator: list[float], denominator: list[float]) -> float:
+def median(laps: list[Lap], kind: str = "wall") -> float:
+    return statistics.median(getattr(lap, kind) for lap in laps)
+
+
+def paired_ratio(numerator: list[Lap], denominator: list[Lap], kind: str = "wall") -> float:
     """Median over repeats of numerator[i] / denominator[i] (blocks run back to back in repeat i)."""
-    return statistics.median(a / b for a, b in zip(numerator, denominator, strict=True))
+    return statistics.median(getattr(a, kind) / getattr(b, kind) for a, b in zip(numerator, denominator, strict=True))
 
 
 def row(
@@ -81,6 +108,7 @@ def row(
     ratio: float | None = None,
     target: str = "",
     met: bool | None = None,
+    ratio_cpu: float | None = None,
     **extra: Any,
 ) -> dict[str, Any]:
     return {
@@ -91,6 +119,7 @@ def row(
         "peer": peer,
         "peer_value": peer_value,
         "ratio": ratio,
+        "ratio_cpu": ratio_cpu,
         "target": target,
         "met": met,
         **extra,
@@ -100,26 +129,26 @@ def row(
 # ---- 1. env.step ---------------------------------------------------------------------------------------------
 
 
-def _step_block(env: gym.Env, n: int) -> Callable[[], float]:
+def _step_block(env: gym.Env, n: int) -> Callable[[], Lap]:
     """n zero-action steps; resets (when an episode ends) are timed and taken out."""
     action = np.zeros(env.action_space.shape)
     step, reset = env.step, env.reset
 
-    def block() -> float:
-        resets = 0.0
-        t0 = time.perf_counter()
+    def block() -> Lap:
+        resets = ZERO
+        t0 = now()
         for _ in range(n):
             _, _, terminated, truncated, _ = step(action)
             if terminated or truncated:
-                r0 = time.perf_counter()
+                r0 = now()
                 reset()
-                resets += time.perf_counter() - r0
-        return time.perf_counter() - t0 - resets
+                resets += now() - r0
+        return now() - t0 - resets
 
     return block
 
 
-def _physics_block(model: mujoco.MjModel, state0: np.ndarray, n: int, chunk: int = 20) -> Callable[[], float]:
+def _physics_block(model: mujoco.MjModel, state0: np.ndarray, n: int, chunk: int = 20) -> Callable[[], Lap]:
     """n raw mj_step calls (in C, `chunk` at a time) from the env's reset state: the physics floor of a step.
 
     Restarting every `chunk` steps keeps each model in the regime its env steps in (the inverted pendulum
@@ -127,18 +156,18 @@ def _physics_block(model: mujoco.MjModel, state0: np.ndarray, n: int, chunk: int
     """
     data = mujoco.MjData(model)
 
-    def block() -> float:
-        t0 = time.perf_counter()
+    def block() -> Lap:
+        t0 = now()
         for _ in range(n // chunk):
             mujoco.mj_setState(model, data, state0, STATE)
             mujoco.mj_step(model, data, nstep=chunk)
-        return time.perf_counter() - t0
+        return now() - t0
 
     return block
 
 
 def bench_env_step(quick: bool) -> list[dict[str, Any]]:
-    n, repeats = (200, 3) if quick else (2000, 15)
+    n, repeats = (200, 3) if quick else (2000, 21)
     env_ids = [PEER_ENV, *sorted(registry.env_classes())]
     blocks, physics, about = {}, {}, {}
     for env_id in env_ids:
@@ -155,26 +184,37 @@ def bench_env_step(quick: bool) -> list[dict[str, Any]]:
         blocks[env_id]()  # warm-up: the env checker's first-call checks, caches
     times = interleaved({**blocks, **{f"physics {k}": v for k, v in physics.items()}}, repeats)
     peer = times[PEER_ENV]
+    peer_us = median(peer) / n * 1e6
     rows = []
     for env_id in env_ids:
-        step_us = statistics.median(times[env_id]) / n * 1e6
-        floor_us = statistics.median(times[f"physics {env_id}"]) / n * 1e6
-        extra = {"physics_us": floor_us, "overhead_us": step_us - floor_us, "model": about[env_id]}
+        step_us = median(times[env_id]) / n * 1e6
+        floor_us = median(times[f"physics {env_id}"]) / n * 1e6
+        extra = {
+            "step_us": step_us,
+            "physics_us": floor_us,
+            "overhead_us": step_us - floor_us,
+            "step_us_cpu": median(times[env_id], "cpu") / n * 1e6,
+            "physics_us_cpu": median(times[f"physics {env_id}"], "cpu") / n * 1e6,
+            # The best ratio any Python layer could reach: the peer's whole step over this env's bare physics.
+            "ceiling": peer_us / floor_us,
+            "model": about[env_id],
+        }
         if env_id == PEER_ENV:
-            rows.append(row("env.step", f"{env_id} env.step (peer)", n / statistics.median(peer), "steps/s", **extra))
+            rows.append(row("env.step", f"{env_id} env.step (peer)", n / median(peer), "steps/s", **extra))
             continue
         ratio = paired_ratio(peer, times[env_id])
         rows.append(
             row(
                 "env.step",
                 f"{env_id} env.step",
-                n / statistics.median(times[env_id]),
+                n / median(times[env_id]),
                 "steps/s",
                 PEER_ENV,
-                n / statistics.median(peer),
+                n / median(peer),
                 ratio,
                 ">= 1.5x",
                 ratio >= 1.5,
+                ratio_cpu=paired_ratio(peer, times[env_id], "cpu"),
                 **extra,
             )
         )
@@ -191,74 +231,82 @@ def _jobs(quick: bool) -> list[tuple[Any, str]]:
     return [(s, c.name) for s in registry.scenarios().values() for c in s.cases]
 
 
-def _raw_rollout(scenario: Any, case: str, nstep: int) -> float:
-    """Seconds for one rollout of `nstep` steps of the same compiled model, initial state and controls."""
+def _raw_rollout(scenario: Any, case: str, nstep: int) -> Lap:
+    """One rollout of `nstep` steps of the same compiled model, initial state and controls."""
     model = scenario.build(scenario.resolve(scenario.case(case)))
     data = scenario.start(model)
     state0 = get_state(model, data)
     control = scenario.control(model, model.opt.timestep, nstep)
     kwargs = {} if control is None else {"control": control[None]}
-    t0 = time.perf_counter()
+    t0 = now()
     rollout.rollout(model, data, state0[None], nstep=nstep, **kwargs)
-    return time.perf_counter() - t0
+    return now() - t0
 
 
 def bench_runner(quick: bool) -> tuple[list[dict[str, Any]], dict[str, Any]]:
     repeats = 1 if quick else 3
-    per_case: dict[str, dict[str, list[float]]] = {}
+    per_case: dict[str, dict[str, list[Lap]]] = {}
     nsteps: dict[str, int] = {}
     for _ in range(repeats):
         for scenario, case in _jobs(quick):
             name = f"{scenario.slug}:{case}"
-            t0 = time.perf_counter()
+            t0 = now()
             run = scenario.run(case)
-            t_run = time.perf_counter() - t0
+            t_run = now() - t0
             nsteps[name] = run.nstep
             t_raw = _raw_rollout(scenario, case, run.nstep)
             times = per_case.setdefault(name, {"run": [], "raw": []})
             times["run"].append(t_run)
             times["raw"].append(t_raw)
     total_steps = sum(nsteps.values())
-    run_totals = [sum(t["run"][i] for t in per_case.values()) for i in range(repeats)]
-    raw_totals = [sum(t["raw"][i] for t in per_case.values()) for i in range(repeats)]
+    run_totals = [sum((t["run"][i] for t in per_case.values()), ZERO) for i in range(repeats)]
+    raw_totals = [sum((t["raw"][i] for t in per_case.values()), ZERO) for i in range(repeats)]
     ratio = paired_ratio(raw_totals, run_totals)
     rows = [
         row(
             "runner",
             f"Scenario.run, {len(per_case)} case(s), physics steps/s",
-            total_steps / statistics.median(run_totals),
+            total_steps / median(run_totals),
             "steps/s",
             "raw mujoco.rollout, same models",
-            total_steps / statistics.median(raw_totals),
+            total_steps / median(raw_totals),
             ratio,
             ">= 0.80",
             ratio >= 0.8,
+            ratio_cpu=paired_ratio(raw_totals, run_totals, "cpu"),
         )
     ]
-    worst = min(per_case, key=lambda k: paired_ratio(per_case[k]["raw"], per_case[k]["run"]))
+    worst = min(per_case, key=lambda k: paired_ratio(per_case[k]["raw"], per_case[k]["run"], "cpu"))
     w = per_case[worst]
     rows.append(
         row(
             "runner",
             f"  worst case: {worst} ({nsteps[worst]} steps)",
-            nsteps[worst] / statistics.median(w["run"]),
+            nsteps[worst] / median(w["run"]),
             "steps/s",
             "raw mujoco.rollout",
-            nsteps[worst] / statistics.median(w["raw"]),
+            nsteps[worst] / median(w["raw"]),
             paired_ratio(w["raw"], w["run"]),
+            ratio_cpu=paired_ratio(w["raw"], w["run"], "cpu"),
         )
     )
     cases = {
         name: {
             "nstep": nsteps[name],
-            "run_s": statistics.median(t["run"]),
-            "raw_s": statistics.median(t["raw"]),
+            "run_s": median(t["run"]),
+            "raw_s": median(t["raw"]),
             "ratio": paired_ratio(t["raw"], t["run"]),
+            "ratio_cpu": paired_ratio(t["raw"], t["run"], "cpu"),
         }
         for name, t in per_case.items()
     }
-    floor = {"raw_rollout_s": statistics.median(raw_totals), "scenario_run_s": statistics.median(run_totals)}
-    return rows, {"cases": cases, **floor}
+    totals = {
+        "raw_rollout_s": median(raw_totals),
+        "raw_rollout_cpu_s": median(raw_totals, "cpu"),
+        "scenario_run_s": median(run_totals),
+        "scenario_run_cpu_s": median(run_totals, "cpu"),
+    }
+    return rows, {"cases": cases, **totals}
 
 
 # ---- 3. cross-section ----------------------------------------------------------------------------------------
@@ -273,10 +321,14 @@ def bench_cross_section(quick: bool) -> list[dict[str, Any]]:
 # ---- 4. wall time of the command line ------------------------------------------------------------------------
 
 
-def _wall(args: list[str]) -> float:
+def _command(args: list[str]) -> Lap:
+    """Wall-clock and CPU (the child's user + system) seconds of a command."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run(args, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return Lap(wall, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
 
 
 def bench_cli(quick: bool, floor: dict[str, Any], thorough: bool) -> list[dict[str, Any]]:
@@ -284,8 +336,8 @@ def bench_cli(quick: bool, floor: dict[str, Any], thorough: bool) -> list[dict[s
     repeats = 1 if quick else 5
     starts = interleaved(
         {
-            "rigidbench --version": lambda: _wall([py, "-m", "rigidbench", "--version"]),
-            "import mujoco": lambda: _wall([py, "-c", "import mujoco"]),
+            "rigidbench --version": lambda: _command([py, "-m", "rigidbench", "--version"]),
+            "import mujoco": lambda: _command([py, "-c", "import mujoco"]),
         },
         repeats,
     )
@@ -293,34 +345,36 @@ def bench_cli(quick: bool, floor: dict[str, Any], thorough: bool) -> list[dict[s
         row(
             "cli",
             "start-up: rigidbench --version",
-            statistics.median(starts["rigidbench --version"]),
+            median(starts["rigidbench --version"]),
             "s",
             "python -c 'import mujoco'",
-            statistics.median(starts["import mujoco"]),
+            median(starts["import mujoco"]),
             paired_ratio(starts["rigidbench --version"], starts["import mujoco"]),
+            ratio_cpu=paired_ratio(starts["rigidbench --version"], starts["import mujoco"], "cpu"),
         )
     ]
     targets = ["heavy-top:nutation"] if quick else []
-    wall = _wall([py, "-m", "rigidbench", "run", "--quiet", *targets])
+    lap = _command([py, "-m", "rigidbench", "run", "--quiet", *targets])
     what = "rigidbench run " + (" ".join(targets) if targets else "(default targets)")
     rows.append(
         row(
             "cli",
             f"{what}, wall",
-            wall,
+            lap.wall,
             "s",
-            "in-process: sum of Scenario.run / raw rollouts (same cases)",
-            floor["scenario_run_s"],
-            floor["raw_rollout_s"] / wall,
+            "raw mujoco.rollout of the same cases, in-process",
+            floor["raw_rollout_s"],
+            floor["raw_rollout_s"] / lap.wall,
             "<= 60 s",
-            wall <= 60,
-            raw_rollout_s=floor["raw_rollout_s"],
+            lap.wall <= 60,
+            ratio_cpu=floor["raw_rollout_cpu_s"] / lap.cpu,
+            cpu_s=lap.cpu,
         )
     )
     if thorough and "thorough" in PROFILES:
-        wall = _wall([py, "-m", "rigidbench", "run", "--quiet", "--profile", "thorough"])
+        lap = _command([py, "-m", "rigidbench", "run", "--quiet", "--profile", "thorough"])
         rows.append(
-            row("cli", "rigidbench run --profile thorough, wall", wall, "s", target="<= 600 s", met=wall <= 600)
+            row("cli", "rigidbench run --profile thorough, wall", lap.wall, "s", target="<= 600 s", met=lap.wall <= 600)
         )
     return rows
 
@@ -328,14 +382,14 @@ def bench_cli(quick: bool, floor: dict[str, Any], thorough: bool) -> list[dict[s
 # ---- 5. rendering --------------------------------------------------------------------------------------------
 
 
-def _render_block(render: Callable[[], Any], before: Callable[[], Any], n: int) -> Callable[[], float]:
-    def block() -> float:
-        elapsed = 0.0
+def _render_block(render: Callable[[], Any], before: Callable[[], Any], n: int) -> Callable[[], Lap]:
+    def block() -> Lap:
+        elapsed = ZERO
         for _ in range(n):
             before()
-            t0 = time.perf_counter()
+            t0 = now()
             render()
-            elapsed += time.perf_counter() - t0
+            elapsed += now() - t0
         return elapsed
 
     return block
@@ -378,7 +432,7 @@ def _bench_render(env_id: str, n: int, repeats: int, size: dict[str, int]) -> li
     for block in blocks.values():
         block()  # warm-up: GL context, textures
     times = interleaved(blocks, repeats)
-    fps = {k: n / statistics.median(v) for k, v in times.items()}
+    fps = {k: n / median(v) for k, v in times.items()}
     rows = [
         row(
             "render",
@@ -422,7 +476,7 @@ def _fmt(x: Any) -> str:
 
 def table(rows: list[dict[str, Any]]) -> str:
     cols = [("figure", "figure"), ("value", "value"), ("unit", "unit"), ("peer", "peer"), ("peer_value", "peer value")]
-    cols += [("ratio", "ratio"), ("target", "target"), ("met", "met")]
+    cols += [("ratio", "ratio"), ("ratio_cpu", "cpu ratio"), ("target", "target"), ("met", "met")]
     cells = [[_fmt(r[key]) for key, _ in cols] for r in rows]
     widths = [max(len(title), *(len(c[i]) for c in cells)) for i, (_, title) in enumerate(cols)]
     lines = ["  ".join(title.ljust(w) for (_, title), w in zip(cols, widths, strict=True))]
@@ -432,15 +486,18 @@ def table(rows: list[dict[str, Any]]) -> str:
 
 
 def env_step_detail(rows: list[dict[str, Any]]) -> str:
-    lines = ["env.step per step (us): total = physics floor (raw mj_step, same model) + per-step Python"]
+    lines = [
+        "env.step, us per step (medians): step = physics floor (raw mj_step, same model, in C) + per-step Python;",
+        f"ceiling = {PEER_ENV}'s step / this env's physics floor, the best ratio any Python layer could reach",
+    ]
     for r in rows:
         if "physics_us" in r:
-            total = r["physics_us"] + r["overhead_us"]
+            name = r["figure"].removesuffix(" env.step").removesuffix(" (peer)")
             lines.append(
-                f"  {r['figure'].removesuffix(' env.step').removesuffix(' (peer)'):<40} {total:6.2f} = "
-                f"{r['physics_us']:5.2f} + {r['overhead_us']:5.2f}   [{r['model']}]"
+                f"  {name:<34} {r['step_us']:6.2f} = {r['physics_us']:5.2f} + {r['overhead_us']:5.2f}   "
+                f"ceiling {r['ceiling']:4.2f}x   [{r['model']}]"
             )
-    return "\n".join(lines)
+    return "\n".join(lines) + "\n"
 
 
 def _finite(x: Any) -> Any:
