@@ -50,6 +50,40 @@ def _parser() -> argparse.ArgumentParser:
     p_run.add_argument("--json", metavar="PATH", help="write the results as JSON")
     p_run.add_argument("--junit", metavar="PATH", help="write the results as JUnit XML")
     p_run.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+    p_sweep = sub.add_parser(
+        "sweep",
+        help="errors over integrators x timesteps (x parameters) and the observed order of convergence",
+        description="Run every check of the targets over integrators x timesteps (x swept parameter values) and "
+        "fit the observed order of convergence (rule: rigidbench.sweep.observed_order). Default grid: all four "
+        "integrators x dt_ref * 2^k, k = 0..5, dt_ref the scenario model file's timestep.",
+    )
+    p_sweep.add_argument(
+        "targets", nargs="*", metavar="TARGET", help="'scenario' or 'scenario:case' (default: every scenario)"
+    )
+    p_sweep.add_argument("--integrators", nargs="+", metavar="NAME", help=f"default: all of {', '.join(INTEGRATORS)}")
+    p_sweep.add_argument(
+        "--timesteps",
+        nargs="+",
+        type=_positive_float,
+        metavar="SECONDS",
+        help="default: dt_ref * 2^k, k = 0..5, per scenario",
+    )
+    p_sweep.add_argument(
+        "--param",
+        dest="params",
+        action="append",
+        default=[],
+        metavar="NAME=V1,V2,...",
+        help="sweep a numeric parameter over these values (SI units), e.g. stiffness=1e5,1e6,1e7; repeatable",
+    )
+    p_sweep.add_argument(
+        "--stiffness", metavar="K1,K2,...", help="shorthand for --param stiffness=K1,K2,... (contact scenarios)"
+    )
+    p_sweep.add_argument("--workers", type=int, default=2, help="worker processes (default 2; 1 = in process)")
+    p_sweep.add_argument("--errors", action="store_true", help="also print the error at every grid point")
+    p_sweep.add_argument("--json", metavar="PATH", help="write every point's rows and the fitted orders as JSON")
+    p_sweep.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     return parser
 
 
@@ -71,6 +105,51 @@ def _parse_sets(items: Sequence[str]) -> dict[str, str]:
             raise UsageError(f"--set expects NAME=VALUE, got {item!r}")
         out[name.strip()] = value.strip()
     return out
+
+
+def _parse_sweeps(items: Sequence[str], stiffness: str | None) -> dict[str, list[float]]:
+    out: dict[str, list[float]] = {}
+    for item in [*items, *([f"stiffness={stiffness}"] if stiffness else [])]:
+        name, sep, values = item.partition("=")
+        if not sep or not name.strip() or not values.strip():
+            raise UsageError(f"--param expects NAME=V1,V2,..., got {item!r}")
+        try:
+            out[name.strip()] = [float(v) for v in values.split(",")]
+        except ValueError:
+            raise UsageError(f"--param {name.strip()}: cannot read {values!r} as comma-separated numbers") from None
+    return out
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from rigidbench import sweep
+
+    if args.workers < 1:
+        raise UsageError(f"--workers = {args.workers} must be >= 1")
+    try:
+        points = sweep.plan(
+            args.targets,
+            integrators=args.integrators,
+            timesteps=args.timesteps,
+            params=_parse_sweeps(args.params, args.stiffness),
+        )
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    t0 = time.perf_counter()
+    try:
+        result = sweep.execute(points, workers=args.workers, progress=None if args.quiet else sweep.progress_line)
+    except KeyboardInterrupt:
+        print("rigidbench: sweep interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if args.errors:
+        print(sweep.error_table(result))
+        print()
+    print(sweep.order_table(result.orders))
+    import mujoco
+
+    print(f"\nmujoco {mujoco.__version__}; {len(points)} points in {time.perf_counter() - t0:.1f} s")
+    if args.json:
+        sweep.write_json(args.json, result)
+    return EXIT_OK
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
@@ -146,6 +225,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 return _cmd_list(args)
             except ValueError as exc:
                 raise UsageError(str(exc)) from None
+        if args.command == "sweep":
+            return _cmd_sweep(args)
         return _cmd_run(args)
     except UsageError as exc:
         print(f"rigidbench: error: {exc}", file=sys.stderr)
