@@ -84,6 +84,26 @@ def _parser() -> argparse.ArgumentParser:
     p_sweep.add_argument("--errors", action="store_true", help="also print the error at every grid point")
     p_sweep.add_argument("--json", metavar="PATH", help="write every point's rows and the fitted orders as JSON")
     p_sweep.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+    p_render = sub.add_parser(
+        "render",
+        help="render a case headless to .gif, .mp4 (needs ffmpeg) or .png",
+        description="Simulate a case (as 'run' does) and render it offscreen (EGL, or OSMesa as a fallback) with "
+        "a camera that frames the whole motion. The clip spans the whole run in slow motion.",
+    )
+    p_render.add_argument("target", metavar="TARGET", help="'scenario' (its first case) or 'scenario:case'")
+    p_render.add_argument("--out", required=True, metavar="FILE", help="output file: .gif, .mp4 or .png")
+    p_render.add_argument("--profile", default="reference", help=f"settings profile: {', '.join(PROFILES)}")
+    p_render.add_argument(
+        "--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="override a parameter"
+    )
+    p_render.add_argument("--integrator", help=f"override the integrator: {', '.join(INTEGRATORS)}")
+    p_render.add_argument("--timestep", type=_positive_float, metavar="SECONDS", help="override the timestep (s)")
+    p_render.add_argument("--frames", type=int, default=90, help="frames over the run (default 90)")
+    p_render.add_argument("--fps", type=_positive_float, default=30.0, help="playback frames per second (default 30)")
+    p_render.add_argument("--size", default="480x360", metavar="WxH", help="pixels (default 480x360)")
+    p_render.add_argument("--at", type=float, metavar="SECONDS", help="for .png: the simulated time (default 0)")
+    p_render.add_argument("--no-trail", action="store_true", help="do not draw the centre-of-mass trail")
     return parser
 
 
@@ -150,6 +170,60 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.json:
         sweep.write_json(args.json, result)
     return EXIT_OK
+
+
+def _cmd_render(args: argparse.Namespace) -> int:
+    import os
+    import subprocess
+
+    from rigidbench import render, runner
+
+    try:
+        settings = runner.settings_for(args.profile, args.integrator, args.timestep)
+        width, _, height = args.size.lower().partition("x")
+        try:
+            size = (int(width), int(height))
+        except ValueError:
+            raise ValueError(f"--size expects WxH in pixels, got {args.size!r}") from None
+        scenario, cases = _target(args.target)
+        overrides = {n: scenario.param(n).parse(v) for n, v in _parse_sets(args.sets).items()}
+        if os.path.splitext(args.out)[1].lower() not in render.FORMATS:
+            raise ValueError(f"--out {args.out!r}: the extension must be one of {', '.join(render.FORMATS)}")
+        still = os.path.splitext(args.out)[1].lower() == ".png"
+        clip = render.render_clip(
+            f"{scenario.slug}:{cases[0]}",
+            overrides=overrides,
+            settings=settings,
+            frames=args.frames,
+            fps=args.fps,
+            width=size[0],
+            height=size[1],
+            at=(args.at or 0.0) if still else None,
+            trail=not args.no_trail,
+        )
+        print(render.write(clip, args.out))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    except render.RenderError as exc:
+        # EGL is what `import rigidbench` picks without a display; OSMesa is the software fallback. A backend
+        # is chosen once per process, so the retry is a fresh process.
+        if (
+            isinstance(exc, render.NoGLContext)
+            and os.environ.get("MUJOCO_GL") == "egl"
+            and not os.environ.get("RIGIDBENCH_NO_GL_FALLBACK")
+        ):
+            print(f"rigidbench: {exc}; retrying with MUJOCO_GL=osmesa", file=sys.stderr)
+            env = {**os.environ, "MUJOCO_GL": "osmesa", "PYOPENGL_PLATFORM": "osmesa", "RIGIDBENCH_NO_GL_FALLBACK": "1"}
+            return subprocess.run([sys.executable, "-m", "rigidbench", *sys.argv[1:]], env=env, check=False).returncode
+        print(f"rigidbench: error: {exc}", file=sys.stderr)
+        return EXIT_FAIL
+    return EXIT_OK
+
+
+def _target(target: str):
+    from rigidbench import registry
+
+    return registry.parse_target(target)
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
@@ -227,6 +301,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 raise UsageError(str(exc)) from None
         if args.command == "sweep":
             return _cmd_sweep(args)
+        if args.command == "render":
+            return _cmd_render(args)
         return _cmd_run(args)
     except UsageError as exc:
         print(f"rigidbench: error: {exc}", file=sys.stderr)
