@@ -85,6 +85,28 @@ def _parser() -> argparse.ArgumentParser:
     p_sweep.add_argument("--json", metavar="PATH", help="write every point's rows and the fitted orders as JSON")
     p_sweep.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
+    p_report = sub.add_parser(
+        "report",
+        help="one self-contained HTML page: results table, settings, figures, convergence",
+        description="Build one self-contained HTML page (figures embedded as PNG, no external resources). Results "
+        "come from --from files (rigidbench run --json / sweep --json); with no run results among them, the "
+        "targets are simulated under the reference profile first.",
+    )
+    p_report.add_argument(
+        "targets", nargs="*", metavar="TARGET", help="scenarios to simulate when no run results are given"
+    )
+    p_report.add_argument("--out", required=True, metavar="PATH", help="the HTML file to write")
+    p_report.add_argument(
+        "--from",
+        dest="sources",
+        nargs="+",
+        default=[],
+        metavar="JSON",
+        help="results of 'rigidbench run --json' and/or 'rigidbench sweep --json'",
+    )
+    p_report.add_argument("--figures", metavar="DIR", help="also write every figure as a PNG file into DIR")
+    p_report.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
     p_render = sub.add_parser(
         "render",
         help="render a case headless to .gif, .mp4 (needs ffmpeg) or .png",
@@ -169,6 +191,32 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     print(f"\nmujoco {mujoco.__version__}; {len(points)} points in {time.perf_counter() - t0:.1f} s")
     if args.json:
         sweep.write_json(args.json, result)
+    return EXIT_OK
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from rigidbench import plots, report, results, runner
+
+    try:
+        runs, sweeps = report.load(args.sources)
+        jobs = runner.plan(args.targets, {}, runner.settings_for("reference")) if not runs else []
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    try:
+        plots.pyplot()
+    except plots.MissingDependency as exc:
+        raise UsageError(str(exc)) from None
+    say = None if args.quiet else report.progress_line
+    if jobs:
+        rows: list[dict] = []
+        for i, batch in enumerate(runner.execute(jobs, runner.settings_for("reference"))):
+            if say:
+                say(f"[{i + 1}/{len(jobs)}] {jobs[i].name}")
+            rows.extend(batch)
+        runs = [results.document(rows)]
+    text = report.build(runs, sweeps, progress=say, figure_dir=args.figures)
+    report.write(args.out, text)
+    print(f"{args.out}: {len(text) / 1e6:.2f} MB, {text.count('<img ')} figures")
     return EXIT_OK
 
 
@@ -301,6 +349,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 raise UsageError(str(exc)) from None
         if args.command == "sweep":
             return _cmd_sweep(args)
+        if args.command == "report":
+            return _cmd_report(args)
         if args.command == "render":
             return _cmd_render(args)
         return _cmd_run(args)

@@ -32,11 +32,15 @@ from rigidbench.settings import INTEGRATORS, MAX_TIMESTEP, Settings
 # fourth-order Runge-Kutta.
 NOMINAL_ORDER = {"Euler": 1, "implicit": 1, "implicitfast": 1, "RK4": 4}
 
-# The default timestep ladder: dt_ref * 2^k for k in LADDER, dt_ref the model file's (reference) timestep.
+# The default timestep ladder: dt_ref * 2^k, k = k_min .. LADDER_TOP, dt_ref the model file's (reference) timestep.
 # Going *up* from the reference step lifts the error of a high-order method off round-off (RK4 at dt_ref is
-# often at 1e-11 for the tops); seven doublings span a factor 128, i.e. 8 decades of error for a 4th-order method,
-# and cost less than one more run at dt_ref (each doubling halves the steps).
-LADDER = tuple(range(8))
+# often at 1e-11 for the tops); nine doublings span a factor 512, i.e. 10 decades of error for a 4th-order method,
+# and cost less than one more run at dt_ref (each doubling halves the steps). Going *down* brings a first-order
+# method into its asymptotic regime (Euler on the heavy top errs by 5e-3..5e-2 at dt_ref): k_min is as low as
+# LADDER_BOTTOM while a run stays within STEP_BUDGET steps, so short cases get finer steps and long ones none.
+LADDER_TOP = 9
+LADDER_BOTTOM = -3
+STEP_BUDGET = 100_000
 
 # Refused points: the model's own checks (e.g. contact stiffness too high for the timestep) rejected them.
 REFUSED = "refused"
@@ -287,9 +291,25 @@ def reference_timestep(slug: str) -> float:
     return float(registry.get(slug).spec().compile().opt.timestep)
 
 
-def ladder(dt_ref: float, steps: Iterable[int] = LADDER) -> list[float]:
-    """Timesteps dt_ref * 2^k (s), k in `steps`, capped at `settings.MAX_TIMESTEP`."""
-    return [dt_ref * 2.0**k for k in steps if dt_ref * 2.0**k <= MAX_TIMESTEP]
+def ladder(dt_ref: float, duration: float | None = None) -> list[float]:
+    """The default timesteps (s): dt_ref * 2^k for k = k_min .. `LADDER_TOP`, capped at `settings.MAX_TIMESTEP`.
+
+    k_min = 0 without a `duration` (s); with one, the lowest k >= `LADDER_BOTTOM` whose run of
+    ``duration / (dt_ref 2^k)`` steps stays within `STEP_BUDGET` (and never above 0).
+    """
+    k_min = 0
+    if duration is not None and duration > 0:
+        k_min = max(LADDER_BOTTOM, min(0, -math.floor(math.log2(STEP_BUDGET * dt_ref / duration))))
+    return [dt_ref * 2.0**k for k in range(k_min, LADDER_TOP + 1) if dt_ref * 2.0**k <= MAX_TIMESTEP]
+
+
+def case_duration(slug: str, case: str, overrides: Mapping[str, Any] | None = None) -> float:
+    """Simulated time (s) of a case at the model file's settings (predicted, nothing is simulated)."""
+    scenario = registry.get(slug)
+    params = scenario.resolve(scenario.case(case), overrides)
+    model = scenario.build(params)
+    data = scenario.start(model)
+    return float(scenario.duration(scenario.predict(model, data)))
 
 
 def plan(
@@ -308,7 +328,7 @@ def plan(
     integrators : sequence of str, optional
         Default: all four.
     timesteps : sequence of float, optional
-        Seconds. Default: `ladder` of each scenario's reference timestep.
+        Seconds. Default: `ladder` of each scenario's reference timestep and each case's duration.
     params : mapping of str to sequence of float, optional
         Parameters to sweep (SI units), e.g. ``{"stiffness": [1e5, 1e6, 1e7]}``; their values multiply the grid.
         A scenario with a ``stiffness`` parameter that is not named here sweeps it over its default x 10^(-1, 0,
@@ -343,9 +363,17 @@ def plan(
         combos: list[tuple[tuple[str, float], ...]] = [()]
         for name, values in swept.items():
             combos = [(*c, (name, float(v))) for c in combos for v in values]
-        steps = list(timesteps) if timesteps else ladder(reference_timestep(scenario.slug))
+        dt_ref = reference_timestep(scenario.slug)
         for case in cases:
             for combo in combos:
+                try:
+                    steps = (
+                        list(timesteps)
+                        if timesteps
+                        else ladder(dt_ref, case_duration(scenario.slug, case, dict(combo)))
+                    )
+                except ValueError as exc:
+                    raise ValueError(f"{scenario.slug}:{case}: {exc}") from None
                 for integrator in integrators:
                     for dt in steps:
                         points.append(Point(scenario.slug, case, integrator, float(dt), combo))
