@@ -124,9 +124,7 @@ def summary_table(sweeps: dict[str, dict], integrators: Sequence[str] = INTEGRAT
         cells = []
         for c in cols:
             xs = groups[key].get(c, [])
-            cells.append(
-                f"{statistics.median(xs):.2f} ({min(xs):.1f}-{max(xs):.1f}, n={len(xs)})" if xs else "-"
-            )
+            cells.append(f"{statistics.median(xs):.2f} ({min(xs):.1f}-{max(xs):.1f}, n={len(xs)})" if xs else "-")
         lines.append(f"| {key} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

@@ -268,8 +268,13 @@ def fit_orders(rows: Iterable[Mapping[str, Any]]) -> list[Order]:
                 names.append(row["check"])
         groups.setdefault((*base, None), []).append(row)  # every point, diverged and refused included
     out = []
+    measured = {key[:4] for key in groups if key[4] is not None}
     for (scenario, case, param, integrator, check), group in groups.items():
         if check is None:
+            if (scenario, case, param, integrator) not in measured:  # nothing to fit: say so, not nothing
+                nominal = NOMINAL_ORDER.get(integrator, 0)
+                reason = "diverged or refused at every timestep"
+                out.append(Order(scenario, case, "(every check)", integrator, param, nominal, None, (), reason))
             continue
         everything = groups[(scenario, case, param, integrator, None)]
         steps = sorted({r["point"]["timestep"] for r in everything})
@@ -387,6 +392,11 @@ def run_point(point: Point) -> list[dict[str, Any]]:
     row with status ``"refused"`` and the reason, instead of raising: it is a finding of the sweep.
     """
     scenario = registry.get(point.scenario)
+    # MuJoCo's warnings (e.g. "Nan, Inf or huge value in QACC" at a diverging point) are recorded with the point
+    # instead of being printed by every worker and appended to MUJOCO_LOG.TXT; divergence is detected anyway.
+    warnings: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(warnings.append)
     try:
         run = scenario.run(point.case, dict(point.param), point.settings())
     except ValueError as exc:
@@ -410,8 +420,11 @@ def run_point(point: Point) -> list[dict[str, Any]]:
         ]
     else:
         rows = rows_of(run)
+    finally:
+        mujoco.set_mju_user_warning(previous)
     for row in rows:
         row["point"] = point.record()
+        row["mujoco_warnings"] = list(warnings)
     return rows
 
 
