@@ -97,6 +97,10 @@ def _panel(ax, rows: Sequence[Mapping[str, Any]], orders: Mapping[str, Mapping[s
             c = np.polyfit(x, np.log(e[used]), 1)
             xs = np.linspace(x.min(), x.max(), 2)
             ax.loglog(np.exp(xs), np.exp(np.polyval(c, xs)), "-", color=color, lw=1.0)
+    from matplotlib.ticker import NullFormatter
+
+    ax.xaxis.set_minor_formatter(NullFormatter())  # a narrow range would label minor ticks over each other
+    ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("timestep (s)", fontsize=8)
     ax.set_ylabel("error", fontsize=8)
     ax.tick_params(labelsize=7)
