@@ -83,7 +83,7 @@ def _panel(ax, rows: Sequence[Mapping[str, Any]], orders: Mapping[str, Mapping[s
             continue
         h, e = np.array(pts).T
         o = orders.get(integrator, {})
-        used = np.isin(h, o.get("used", []))
+        used = np.isin(h, o.get("used", []) if o.get("observed") is not None else [])
         color, marker = COLORS.get(integrator, "C7"), MARKERS.get(integrator, "o")
         short = {"implicitfast": "ifast", "implicit": "impl"}.get(integrator, integrator)
         if o.get("observed") is not None:
