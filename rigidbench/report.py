@@ -183,13 +183,14 @@ def _page(rows, runs, sweeps, versions, figures) -> str:
 
 
 def _settings_table(rows) -> str:
-    seen: dict[str, dict] = {}
-    for r in rows:
-        seen.setdefault(r["scenario"], r["settings"])
     keys = ["integrator", "timestep", "cone", "solref", "solimp", "mujoco"]
+    seen: dict[tuple, tuple[str, dict]] = {}  # one line per scenario and distinct settings
+    for r in rows:
+        key = (r["scenario"], *(json.dumps(r["settings"].get(k)) for k in keys))
+        seen.setdefault(key, (r["scenario"], r["settings"]))
     head = "".join(f"<th>{k}</th>" for k in ["scenario", *keys])
     body = []
-    for slug, s in seen.items():
+    for slug, s in seen.values():
         cells = "".join(
             f"<td>{html.escape(_num(s.get(k)) if not isinstance(s.get(k), list) else str(s[k]))}</td>" for k in keys
         )
@@ -200,7 +201,7 @@ def _settings_table(rows) -> str:
 def _results_table(rows) -> str:
     head = "".join(
         f"<th>{h}</th>"
-        for h in ("scenario:case", "check", "measured", "expected", "unit", "error", "tolerance", "verdict")
+        for h in ("scenario:case", "check", "measured", "expected", "unit", "error", "tolerance", "verdict", "mujoco")
     )
     body = []
     for r in rows:
@@ -215,7 +216,7 @@ def _results_table(rows) -> str:
             f"<td>{html.escape(r['scenario'])}:{html.escape(r['case'])}</td><td>{html.escape(r['check'])}</td>"
             f"<td class=n>{_num(r.get('measured'))}</td><td class=n>{_num(r.get('expected'))}</td>"
             f"<td>{html.escape(r.get('unit') or '')}</td><td class=n>{err}</td><td>{tol}</td>"
-            f"<td class=verdict>{verdict}</td></tr>"
+            f"<td class=verdict>{verdict}</td><td>{html.escape(str(r['settings'].get('mujoco', '')))}</td></tr>"
         )
     return f"<table id=results><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
 

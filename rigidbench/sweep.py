@@ -454,9 +454,8 @@ def execute(
                     results[i] = future.result()
                     if progress is not None:
                         progress(done, len(points), points[i])
-            except BaseException:
-                for f in futures:
-                    f.cancel()
+            except BaseException:  # Ctrl-C or a worker's error: drop what has not started, do not wait for it
+                pool.shutdown(wait=False, cancel_futures=True)
                 raise
     sweep = Sweep(points=list(points))
     sweep.rows = [row for rows in results if rows is not None for row in rows]
