@@ -86,12 +86,14 @@ def heavy_top(ctx: PlotContext) -> list[Figure]:
         lim = 1.08 * np.sin(max(top.theta_max, 1e-3))
         ax.set_xlim(-lim, lim)
         ax.set_ylim(-lim, lim)
+        ax.locator_params(nbins=4)
     figures.append(
         Figure(
             "Heavy top: path of the symmetry axis",
             "Horizontal projection of the unit symmetry axis e3 (MuJoCo, red) between the circles sin(theta_min) "
             "and sin(theta_max) of the theory (dashed): cusps when the top is released at rest (nutation), loops "
-            "when the initial precession opposes the gyroscopic one (looping), a tight rosette for the sleeping top.",
+            "when the initial precession opposes the gyroscopic one (looping), and the same cusps in a narrow band "
+            "near the vertical for the sleeping top (note the axis scale).",
             fig,
         )
     )
