@@ -2,10 +2,15 @@
 
 import json
 
+import mujoco
 import numpy as np
 import pytest
 
-from rigidbench import cli, sweep
+from rigidbench import cli, registry, sweep
+from rigidbench.contact import elastic_contact
+from rigidbench.envs.heavy_top import HeavyTop
+from rigidbench.params import Numeric, Param, positive
+from rigidbench.scenario import _model_xml
 
 H = 1e-4 * 2.0 ** np.arange(10)
 
@@ -128,3 +133,42 @@ def test_bad_sweep_input_exits_2_naming_the_problem(args, named, capsys):
     assert cli.main(["sweep", "--quiet", *args]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and named in err[0]
+
+
+class _StiffTop(HeavyTop):
+    """The heavy top with a made-up contact `stiffness` (1/s^2) that refuses timesteps too coarse for it, as the
+    contact scenarios do (`rigidbench.contact.elastic_contact`): a stand-in until those scenarios are merged."""
+
+    slug = "stiff-top"
+    params = (*HeavyTop.params, Param("stiffness", "1/s^2", "contact stiffness", positive(1e12), Numeric("stiffness")))
+
+    def spec(self):
+        spec = mujoco.MjSpec.from_string(_model_xml("heavy_top"))
+        numeric = spec.add_numeric()
+        numeric.name, numeric.data = "stiffness", [1e6]
+        return spec
+
+    def check_model(self, model):
+        elastic_contact(timestep=model.opt.timestep, stiffness=float(model.numeric("stiffness").data[0]))
+
+
+@pytest.fixture
+def stiff_top(monkeypatch):
+    fake, original = _StiffTop(), registry.get
+    monkeypatch.setattr(registry, "get", lambda slug: fake if slug == fake.slug else original(slug))
+    return fake
+
+
+def test_a_stiffness_parameter_is_swept_by_default_and_too_coarse_steps_are_refused(stiff_top):
+    """k = 1e5, 1e6, 1e7 1/s^2: the contact lasts pi/sqrt(k) ~ 1 ms at 1e7, fewer than 4 steps of 4e-4 s."""
+    points = sweep.plan(["stiff-top:nutation"], integrators=["RK4"], timesteps=[1e-4, 2e-4, 4e-4])
+    assert sorted({p.param for p in points}) == [(("stiffness", k),) for k in (1e5, 1e6, 1e7)]
+    result = sweep.execute(points, workers=1)
+    refused = [r for r in result.rows if r["status"] == sweep.REFUSED]
+    assert {(r["point"]["param"]["stiffness"], r["point"]["timestep"]) for r in refused} == {(1e7, 4e-4)}
+    assert "stiffness" in refused[0]["reason"] and refused[0]["settings"]["mujoco"]
+    scored = [r for r in result.rows if r["status"] != sweep.REFUSED]
+    assert {r["params"]["stiffness"] for r in scored} == {1e5, 1e6, 1e7}
+    assert "ref" in sweep.error_table(result)
+    explicit = sweep.plan(["stiff-top:nutation"], integrators=["RK4"], timesteps=[1e-4], params={"stiffness": [2e5]})
+    assert [p.param for p in explicit] == [(("stiffness", 2e5),)]
