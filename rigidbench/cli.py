@@ -105,6 +105,9 @@ def _parser() -> argparse.ArgumentParser:
         help="results of 'rigidbench run --json' and/or 'rigidbench sweep --json'",
     )
     p_report.add_argument("--figures", metavar="DIR", help="also write every figure as a PNG file into DIR")
+    p_report.add_argument(
+        "--clips", action="store_true", help="also embed a short GIF of each scenario (needs OpenGL and Pillow)"
+    )
     p_report.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
     p_render = sub.add_parser(
@@ -214,7 +217,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
                 say(f"[{i + 1}/{len(jobs)}] {jobs[i].name}")
             rows.extend(batch)
         runs = [results.document(rows)]
-    text = report.build(runs, sweeps, progress=say, figure_dir=args.figures)
+    text = report.build(runs, sweeps, progress=say, figure_dir=args.figures, clips=args.clips)
     report.write(args.out, text)
     print(f"{args.out}: {len(text) / 1e6:.2f} MB, {text.count('<img ')} figures")
     return EXIT_OK

@@ -63,7 +63,8 @@ def png(figure: Any, dpi: int = 110) -> bytes:
 
 
 def _img(data: bytes, alt: str) -> str:
-    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{base64.b64encode(data).decode()}">'
+    mime = "image/gif" if data[:3] == b"GIF" else "image/png"
+    return f'<img alt="{html.escape(alt)}" src="data:{mime};base64,{base64.b64encode(data).decode()}">'
 
 
 def _num(x: Any) -> str:
@@ -72,6 +73,31 @@ def _num(x: Any) -> str:
     if isinstance(x, str):
         return x
     return f"{x:.10g}" if math.isfinite(x) else str(x)
+
+
+def _clip(scenario, settings: Settings | None) -> tuple[plots.Figure, bytes]:
+    """A small GIF of the scenario's first case, or an empty payload with the reason it could not be made."""
+    import os
+    import tempfile
+
+    from rigidbench import render
+
+    target = f"{scenario.slug}:{scenario.cases[0].name}"
+    title = f"Clip: {target}"
+    try:
+        clip = render.render_clip(target, settings=settings, frames=48, fps=16, width=320, height=240)
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "clip.gif")
+            summary = render.write(clip, path)
+            with open(path, "rb") as f:
+                data = f.read()
+    except (render.RenderError, ValueError) as exc:
+        return plots.Figure(title, f"not rendered here ({exc})", None), b""
+    caption = (
+        f"The whole run of {target} rendered headless: {summary.split(': ', 1)[1]}. The yellow line trails the tip "
+        "of each moving body (the point of its geoms farthest from its joint) over the last quarter of the run."
+    )
+    return plots.Figure(title, caption, None), data
 
 
 def _settings_of(rows: Sequence[Mapping[str, Any]]) -> Settings | None:
@@ -88,6 +114,7 @@ def build(
     *,
     progress: Callable[[str], None] | None = None,
     figure_dir: str | None = None,
+    clips: bool = False,
 ) -> str:
     """The report's HTML text.
 
@@ -99,6 +126,9 @@ def build(
         Each gets its convergence figures and order table.
     figure_dir : str, optional
         Also write every figure there as ``NN-<slug>.png`` (for looking at them one by one).
+    clips : bool
+        Also embed a short GIF of each scenario's first case (`rigidbench.render`; needs OpenGL and Pillow). A
+        scenario that cannot be rendered here gets a line saying why instead.
 
     Raises
     ------
@@ -117,6 +147,9 @@ def build(
         except ValueError:
             continue  # results from a scenario this install does not have: table only
         ctx = plots.PlotContext(scenario, _settings_of([r for r in rows if r["scenario"] == slug]))
+        if clips:
+            say(f"clip: {slug}")
+            figures.append((slug, *_clip(scenario, ctx.settings)))
         for fn in plots.plots_for(slug):
             say(f"figures: {slug} ({fn.__name__})")
             for fig in fn(ctx):
@@ -133,7 +166,10 @@ def build(
 
         os.makedirs(figure_dir, exist_ok=True)
         for i, (slug, _fig, data) in enumerate(figures):
-            with open(os.path.join(figure_dir, f"{i:02d}-{slug}.png"), "wb") as f:
+            if not data:
+                continue
+            ext = "gif" if data[:3] == b"GIF" else "png"
+            with open(os.path.join(figure_dir, f"{i:02d}-{slug}.{ext}"), "wb") as f:
                 f.write(data)
     return _page(rows, runs, sweeps, versions, figures)
 
@@ -165,6 +201,9 @@ def _page(rows, runs, sweeps, versions, figures) -> str:
             continue
         out.append(f'<section class=scenario data-scenario="{html.escape(slug)}"><h2>{html.escape(slug)}</h2>')
         for fig, data in mine:
+            if not data:  # a clip that could not be rendered here
+                out.append(f"<p class=meta>{html.escape(fig.title)}: {html.escape(fig.caption)}</p>")
+                continue
             out.append(
                 f"<figure>{_img(data, fig.title)}<figcaption><b>{html.escape(fig.title)}.</b> "
                 f"{html.escape(fig.caption)}</figcaption></figure>"

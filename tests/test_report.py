@@ -45,6 +45,7 @@ def test_page_is_self_contained(page):
     assert "<link" not in page and "@import" not in page and "url(" not in page
     imgs = re.findall(r"<img[^>]*>", page)
     assert len(imgs) == len(IMG.findall(page)), "an image that is not an embedded base64 PNG"
+    assert len(imgs) == page.count("<img ")
 
 
 def test_every_image_is_a_png_that_decodes(page):
@@ -154,3 +155,16 @@ def test_full_report_loads_in_headless_chromium_with_every_image_and_no_error(tm
         os.makedirs(keep, exist_ok=True)
         shutil.copy(html_path, keep)
         shutil.copy(shot, keep)
+
+
+def test_clips_embed_a_moving_gif_per_scenario(documents, gl_available):
+    from PIL import Image
+
+    from rigidbench import report
+
+    runs, _ = report.load(documents[:1])
+    page = report.build(runs, clips=True)
+    gifs = re.findall(r'<img alt="Clip: heavy-top:nutation" src="data:image/gif;base64,([A-Za-z0-9+/=]+)">', page)
+    assert len(gifs) == 1
+    with Image.open(io.BytesIO(base64.b64decode(gifs[0]))) as im:
+        assert im.n_frames > 1
