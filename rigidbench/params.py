@@ -127,10 +127,13 @@ class ScaledBodyMass:
 @dataclass(frozen=True)
 class RodLength:
     """Full length L (m) of a thin uniform rod along body y: a box geom of half-length L/2, and the body's
-    explicit inertia M L^2 / 12 about the transverse axes x and z (the body's mass as set in the spec)."""
+    explicit inertia M L^2 / 12 about the transverse axes x and z through its centre (the body's mass as set in
+    the spec). With `from_origin`, the rod runs from the body origin (a pivot) to y = L, its centre of mass and
+    geom at y = L/2; otherwise it is centred on the origin."""
 
     body: str
     geom: str
+    from_origin: bool = False
 
     def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
         geom = spec.geom(self.geom)
@@ -140,6 +143,9 @@ class RodLength:
         body = spec.body(self.body)
         transverse = body.mass * float(value) ** 2 / 12
         body.inertia = [transverse, body.inertia[1], transverse]
+        if self.from_origin:
+            geom.pos = [0.0, float(value) / 2, 0.0]
+            body.ipos = [0.0, float(value) / 2, 0.0]
 
     def read(self, model: mujoco.MjModel) -> Value:
         return float(2 * model.geom(self.geom).size[1])
