@@ -300,10 +300,9 @@ class CueStrikeEnv(BlowEnv):
 
     Rewards
         ``reward = -|x - x_theory(t)| / max(s, R)``: the negative deviation of the ball's distance from B2's
-        skid-then-roll path (less v0 tau / 2 for the pulse), relative to the skid distance s (or the radius R
-        for a ball that does not skid). ``info["measured"]`` and
-        ``info["predicted"]`` hold x (m), v_x (m/s) and slip (m/s). The hops (see the module docstring) are
-        visible in observation 1.
+        skid-then-roll path (less v0 tau / 2 for the pulse), relative to the skid distance s (the radius R for a
+        ball that does not skid). ``info["measured"]`` and ``info["predicted"]`` hold x (m), v_x (m/s) and slip
+        (m/s). The hops (see the module docstring) are visible in observation 1.
 
     Starting State
         At rest on the cloth at its resting penetration, then struck during ``reset``: the first observation is
@@ -352,4 +351,5 @@ class CueStrikeEnv(BlowEnv):
             "v_x": float(s.v_W[0, 0]),
             "slip": float(CueStrike.slip(self.model, s)[0]),
         }
-        return abs(measured["x"] - predicted["x"]) / theory.radius, measured, predicted
+        scale = max(theory.skid_distance, theory.radius)  # the length scale of the problem
+        return abs(measured["x"] - predicted["x"]) / scale, measured, predicted
