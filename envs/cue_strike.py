@@ -132,6 +132,21 @@ def _no_skid(p: Mapping[str, Any]) -> float:
     return percussion.no_skid_height(p["radius"])
 
 
+def settle(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+    """Put the ball at rest at the origin at the resting penetration of its soft contact (which depends on the
+    profile's solref/solimp): let it settle for 30 time constants of the contact (solref[0] s, or 1/sqrt(k) in
+    the direct format), then reset the time."""
+    radius = float(model.geom("ball").size[0])
+    data.qpos[:] = [0, 0, radius, 1, 0, 0, 0]
+    data.qvel[:] = 0.0
+    solref = model.geom("ball").solref
+    time_constant = solref[0] if solref[0] > 0 else 1.0 / np.sqrt(-solref[0])
+    mujoco.mj_step(model, data, nstep=max(1, round(30 * time_constant / model.opt.timestep)))
+    data.qpos[:] = [0, 0, data.qpos[2], 1, 0, 0, 0]
+    data.qvel[:] = 0.0
+    data.time = 0.0
+
+
 class CueStrike(Scenario):
     """A billiard ball struck by a horizontal cue at ``height`` above its centre: the slip the blow leaves
     (B1), the skid under Coulomb friction to rolling (B2), and how MuJoCo's contact does it."""
@@ -191,31 +206,30 @@ class CueStrike(Scenario):
             contact.elastic_contact(timestep=float(model.opt.timestep), stiffness=float(-solref[0]))
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
-        # Start at the resting penetration of the soft contact (it depends on the profile's solref/solimp): let
-        # the ball settle for 30 time constants of the contact (solref[0] s, or 1/sqrt(k) in the direct format).
-        radius = float(model.geom("ball").size[0])
-        data.qpos[:] = [0, 0, radius, 1, 0, 0, 0]
-        data.qvel[:] = 0.0
-        solref = model.geom("ball").solref
-        time_constant = solref[0] if solref[0] > 0 else 1.0 / np.sqrt(-solref[0])
-        mujoco.mj_step(model, data, nstep=max(1, round(30 * time_constant / model.opt.timestep)))
-        data.qpos[:] = [0, 0, data.qpos[2], 1, 0, 0, 0]
-        data.qvel[:] = 0.0
-        data.time = 0.0
+        settle(model, data)
 
-    def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
+    def after_blow(self, model: mujoco.MjModel, data: mujoco.MjData) -> tuple[percussion.SkidToRoll, float]:
+        """B2's motion from the instant of an ideal blow on, and the CoM velocity (m/s) just before the blow."""
         p = self.read_params(model)
         gamma = float(model.body("ball").inertia[1] / (p["mass"] * p["radius"] ** 2))
-        theory = percussion.cue_strike(p["radius"], p["mu"], p["g"], p["speed"], p["height"], gamma)
-        t_roll = (1 - ROLLED) * theory.time_to_roll
+        return percussion.cue_strike(p["radius"], p["mu"], p["g"], p["speed"], p["height"], gamma), 0.0
+
+    def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
+        theory, v_before = self.after_blow(model, data)
+        tau = pulse.duration(model)
+        # A rectangular pulse changes the velocity linearly over tau, so the ball lags the impulsive motion by
+        # dv tau / 2 (exact); the slip and velocities after the pulse are those of an impulse at t = 0, since
+        # Coulomb friction slides with the final slip's sign from the first instant.
+        x_offset = -0.5 * (theory.speed - v_before) * tau
         return {
             "_theory": theory,
             "_rest_height": float(data.qpos[2]),
-            "_tau": pulse.duration(model),
+            "_tau": tau,
+            "_x_offset": x_offset,
             "initial-slip": theory.slip,
-            "time-to-roll": t_roll,
+            "time-to-roll": (1 - ROLLED) * theory.time_to_roll,
             "final-speed": theory.final_speed,
-            "skid-distance": theory.skid_distance - 0.5 * theory.speed * pulse.duration(model),
+            "skid-distance": theory.skid_distance + x_offset,
             "energy-lost": theory.energy_lost,
             "residual-slip": 0.0,
             "lift-height": 0.0,
@@ -240,11 +254,11 @@ class CueStrike(Scenario):
             "lift-height": float((m.com_W[:, 2].max() - prediction["_rest_height"]) / theory.radius),
             "energy-lost": 1.0 - self._energy(model, m)[-1] / self._ideal_energy(model, theory),
         }
-        rolled = signals.crossings(t[after], np.abs(slip[after]) - ROLLED * abs(u0), direction=-1) if u0 else []
-        if u0 == 0.0:
+        if abs(u0) <= 1e-9 * abs(theory.speed):  # a blow at the no-skid height: no sliding phase at all
             out["initial-slip"] = float(np.abs(slip[after]).max())
             out["residual-slip"] = float(np.abs(slip[after]).max())
             return out
+        rolled = signals.crossings(t[after], np.abs(slip[after]) - ROLLED * abs(u0), direction=-1)
         t_roll = float(rolled[0]) if len(rolled) else np.nan
         sliding = after & (t <= 0.8 * t_roll)
         out["initial-slip"] = float(np.polyfit(t[sliding], slip[sliding], 1)[1]) if sliding.sum() > 2 else np.nan
@@ -342,7 +356,7 @@ class CueStrikeEnv(BlowEnv):
         s = self._state()
         x, v, u = theory.state(np.array([self.data.time]))
         predicted = {
-            "x": float(x[0]) - 0.5 * theory.speed * self.prediction["_tau"],
+            "x": float(x[0]) + self.prediction["_x_offset"],
             "v_x": float(v[0]),
             "slip": float(u[0]),
         }
@@ -351,5 +365,5 @@ class CueStrikeEnv(BlowEnv):
             "v_x": float(s.v_W[0, 0]),
             "slip": float(CueStrike.slip(self.model, s)[0]),
         }
-        scale = max(theory.skid_distance, theory.radius)  # the length scale of the problem
+        scale = max(abs(theory.skid_distance), theory.radius)  # the length scale of the problem
         return abs(measured["x"] - predicted["x"]) / scale, measured, predicted
