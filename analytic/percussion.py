@@ -295,3 +295,51 @@ def cue_strike(
     """
     spin = speed * height / (gamma * radius**2)
     return skid_to_roll(radius, mu, g, speed, spin, gamma)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The moving stick hitting a resting ball (THEORY.md P5 seen from the stick; P6, the marble shot)
+# ---------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StickHitsBall:
+    """A moving free stick hits a resting point ball at s, perpendicularly (THEORY.md P5 in the stick's frame).
+
+    Attributes
+    ----------
+    approach_speed : float
+        Speed of the stick point s along +x before the impact, V - omega s (m/s) (P2).
+    ball_velocity : float
+        (1 + e) M_eff v_s / (m + M_eff) (m/s), along +x; zero if the point is not approaching (v_s <= 0).
+    com_velocity, angular_velocity : float
+        The stick's V (m/s) and omega_z (rad/s) after the impact.
+    """
+
+    approach_speed: float
+    ball_velocity: float
+    com_velocity: float
+    angular_velocity: float
+
+
+def stick_hits_ball(
+    mass: float,
+    inertia: float,
+    com_velocity: float,
+    angular_velocity: float,
+    s: float,
+    ball_mass: float,
+    restitution: float = 1.0,
+) -> StickHitsBall:
+    """The stick (V, omega_z) hits a resting ball of mass m lying against the stick point s on its +x side.
+
+    The impulse on the ball is J = (1 + e) m M_eff v_s / (m + M_eff) with M_eff = (1/M + s^2/I)^-1 (THEORY.md
+    P5, the relative speed being that of the stick point); the stick gets -J at s: V' = V - J/M,
+    omega' = omega + J s / I.
+    """
+    v_s = com_velocity - angular_velocity * s
+    if v_s <= 0:
+        return StickHitsBall(v_s, 0.0, com_velocity, angular_velocity)
+    m_eff = 1.0 / (1.0 / mass + s**2 / inertia)
+    j = (1.0 + restitution) * ball_mass * m_eff * v_s / (ball_mass + m_eff)
+    return StickHitsBall(v_s, j / ball_mass, com_velocity - j / mass, angular_velocity + j * s / inertia)

@@ -11,7 +11,7 @@ from gymnasium.utils.env_checker import check_env
 from rigidbench import cli, registry
 from rigidbench.settings import profile
 
-FAMILY = ("struck-stick", "ball-stick", "cue-strike", "cushion-rebound", "pivoted-stick")
+FAMILY = ("struck-stick", "ball-stick", "marble-shot", "cue-strike", "cushion-rebound", "pivoted-stick")
 CASES = [f"{slug}:{case.name}" for slug in FAMILY for case in registry.get(slug).cases]
 ENVS = [registry.get(slug).env_id for slug in FAMILY]
 
@@ -55,6 +55,7 @@ def test_predictions_follow_the_compiled_model():
         (["struck-stick", "--set", "offset=0.6"], "offset"),
         (["struck-stick", "--set", "length=-1"], "length"),
         (["ball-stick", "--set", "offset=0.5"], "offset"),
+        (["marble-shot", "--set", "offset=0.51"], "offset"),
         (["pivoted-stick", "--set", "strike=1.5"], "strike"),
         (["cushion-rebound", "--set", "cushion_height=0.06"], "cushion_height"),
         (["cushion-rebound", "--set", "restitution=1.2"], "restitution"),
