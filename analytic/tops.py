@@ -194,30 +194,37 @@ def asymmetric_top(inertia: tuple[float, float, float], omega_body: np.ndarray) 
     if not i1 < i2 < i3:
         raise ValueError(f"inertia must satisfy I1 < I2 < I3, got {inertia}")
     w = np.asarray(omega_body, dtype=float)
-    two_e = float(np.sum(np.array([i1, i2, i3]) * w**2))
-    l2 = float(np.sum((np.array([i1, i2, i3]) * w) ** 2))
-    gap = l2 - two_e * i2
-    if abs(gap) <= 1e-12 * l2:
+    inertia_arr = np.array([i1, i2, i3])
+
+    def gap(ref: float) -> float:
+        """L^2 - 2 E I_ref = sum I_i (I_i - I_ref) w_i^2, summed without cancellation."""
+        return float(np.sum(inertia_arr * (inertia_arr - ref) * w**2))
+
+    two_e = float(np.sum(inertia_arr * w**2))
+    l2 = float(np.sum((inertia_arr * w) ** 2))
+    above_1, above_2, below_3 = gap(i1), gap(i2), -gap(i3)  # L^2 - 2EI1, L^2 - 2EI2, 2EI3 - L^2
+    if abs(above_2) <= 1e-12 * l2:
         raise ValueError("the initial state lies on the separatrix L^2 = 2 E I2 (infinite period)")
-    about_major = gap > 0
-    a1 = np.sqrt((two_e * i3 - l2) / (i1 * (i3 - i1)))
-    a3 = np.sqrt((l2 - two_e * i1) / (i3 * (i3 - i1)))
+    about_major = above_2 > 0
+    a1 = np.sqrt(below_3 / (i1 * (i3 - i1)))
+    a3 = np.sqrt(above_1 / (i3 * (i3 - i1)))
     if about_major:
-        a2 = np.sqrt((two_e * i3 - l2) / (i2 * (i3 - i2)))
-        rate = np.sqrt((i3 - i2) * (l2 - two_e * i1) / (i1 * i2 * i3))
-        m = (i2 - i1) * (two_e * i3 - l2) / ((i3 - i2) * (l2 - two_e * i1))
+        a2 = np.sqrt(below_3 / (i2 * (i3 - i2)))
+        rate = np.sqrt((i3 - i2) * above_1 / (i1 * i2 * i3))
+        m = (i2 - i1) * below_3 / ((i3 - i2) * above_1)
+        m1 = (i3 - i1) * above_2 / ((i3 - i2) * above_1)  # 1 - m, without cancellation near the separatrix
         sigma = 1.0 if w[2] >= 0 else -1.0
         signs = (1.0, sigma, sigma)
         am = np.arctan2(w[1] / (signs[1] * a2), w[0] / a1)  # sn, cn
     else:
-        a1 = np.sqrt((two_e * i3 - l2) / (i1 * (i3 - i1)))
-        a2 = np.sqrt((l2 - two_e * i1) / (i2 * (i2 - i1)))
-        rate = np.sqrt((i2 - i1) * (two_e * i3 - l2) / (i1 * i2 * i3))
-        m = (i3 - i2) * (l2 - two_e * i1) / ((i2 - i1) * (two_e * i3 - l2))
+        a2 = np.sqrt(above_1 / (i2 * (i2 - i1)))
+        rate = np.sqrt((i2 - i1) * below_3 / (i1 * i2 * i3))
+        m = (i3 - i2) * above_1 / ((i2 - i1) * below_3)
+        m1 = -(i3 - i1) * above_2 / ((i2 - i1) * below_3)
         sigma = 1.0 if w[0] >= 0 else -1.0
         signs = (sigma, sigma, 1.0)
         am = np.arctan2(w[1] / (signs[1] * a2), w[2] / a3)  # sn, cn
-    k_quarter = special.ellipk(m)
+    k_quarter = special.ellipkm1(m1)
     return AsymmetricTop(
         inertia=(i1, i2, i3),
         energy=0.5 * two_e,
@@ -250,8 +257,8 @@ def flip_time(inertia: tuple[float, float, float], spin: float, tilt: float) -> 
     i1, i2, i3 = inertia
     c2, s2 = np.cos(tilt) ** 2, np.sin(tilt) ** 2
     denom = i2 * (i2 - i1) * c2 + i3 * (i3 - i1) * s2
-    m = i2 * (i2 - i1) * c2 / denom
-    return float(2 / spin * np.sqrt(i1 * i2 * i3 / ((i3 - i2) * denom)) * special.ellipk(m))
+    m1 = i3 * (i3 - i1) * s2 / denom  # 1 - k^2, formed directly: k -> 1 as eps -> 0
+    return float(2 / spin * np.sqrt(i1 * i2 * i3 / ((i3 - i2) * denom)) * special.ellipkm1(m1))
 
 
 def intermediate_axis_growth_rate(inertia: tuple[float, float, float], spin: float) -> float:
@@ -306,10 +313,12 @@ class HeavyTop:
         """u1 <= u2 <= u3."""
         return tuple(self.u0 - w for w in self.w_roots)
 
-    def theta_at_w(self, w: float) -> float:
-        """theta (rad) at u = u0 - w."""
+    def theta_at_w(self, w: float | np.ndarray) -> float | np.ndarray:
+        """theta (rad) at u = u0 - w (scalar or array)."""
         # sin^2(theta) = 1 - u^2 = sin^2(theta0) + 2 u0 w - w^2, without cancellation near theta = 0
-        return float(np.arctan2(np.sqrt(max(self.sin2_tilt + 2 * self.u0 * w - w * w, 0.0)), self.u0 - w))
+        w = np.asarray(w, dtype=float)
+        theta = np.arctan2(np.sqrt(np.maximum(self.sin2_tilt + 2 * self.u0 * w - w * w, 0.0)), self.u0 - w)
+        return float(theta) if theta.ndim == 0 else theta
 
     @property
     def theta_min(self) -> float:

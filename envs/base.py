@@ -7,6 +7,7 @@ against the theory at every step. A subclass sets `scenario_cls` and implements 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
@@ -75,8 +76,13 @@ class ScenarioEnv(gym.Env):
         self._load(self._case_name, self._params)
         self.observation_space = self._observation_space()
         self.action_space = self._action_space()
+        self._action_low = self.action_space.low.tolist()
+        self._action_high = self.action_space.high.tolist()
 
     # ---- hooks -------------------------------------------------------------------------------------------
+
+    # Names of the observables compared with theory every step (keys of info["measured"] / info["predicted"]).
+    observables: ClassVar[tuple[str, ...]]
 
     def _observation_space(self) -> gym.spaces.Box:
         raise NotImplementedError
@@ -90,8 +96,16 @@ class ScenarioEnv(gym.Env):
     def _apply_action(self, action: np.ndarray) -> None:
         raise NotImplementedError
 
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        """(normalised deviation from theory, measured observables, predicted observables) at this instant."""
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        """The observables predicted by theory (zero action) at times `t` (s), shape (len(t), len(observables))."""
+        raise NotImplementedError
+
+    def _measure(self, obs: np.ndarray) -> np.ndarray:
+        """The same observables measured from an observation, shape (len(observables),)."""
+        raise NotImplementedError
+
+    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        """Normalised deviation from theory (documented per env); the reward is its negative."""
         raise NotImplementedError
 
     # ---- gymnasium API ----------------------------------------------------------------------------------
@@ -105,27 +119,37 @@ class ScenarioEnv(gym.Env):
         case = self.scenario.case(options.get("case", self._case_name)).name
         params = {**self._params, **dict(options.get("params") or {})}
         self._load(case, params)
-        return self._observation(), self._info(0.0)
+        obs = self._observation()
+        info = self._step_info(obs, 0)
+        info.update(case=self._case, params=dict(self._actual), settings=dict(self._settings_record))
+        return obs, info
 
     def step(self, action):
-        action = np.asarray(action, dtype=np.float64)
+        if not (type(action) is np.ndarray and action.dtype == np.float64):
+            action = np.asarray(action, dtype=np.float64)
         if action.shape != self.action_space.shape:
             raise ValueError(f"action shape {action.shape} != {self.action_space.shape}")
-        if not np.all(np.isfinite(action)):
-            raise ValueError(f"action {action} is not finite")
-        # Out-of-range actions are clipped to the action space (gymnasium's MuJoCo convention).
-        self._apply_action(np.clip(action, self.action_space.low, self.action_space.high))
+        # Fast path: every component inside [low, high] (NaN fails the comparison and takes the slow path).
+        inside = zip(self._action_low, action.tolist(), self._action_high, strict=True)
+        if not all(lo <= v <= hi for lo, v, hi in inside):
+            if not np.isfinite(action).all():
+                raise ValueError(f"action {action} is not finite")
+            # Out-of-range actions are clipped to the action space (gymnasium's MuJoCo convention).
+            action = np.clip(action, self.action_space.low, self.action_space.high)
+        self._apply_action(action)
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
-        diverged = self._diverged()
-        if diverged:
-            obs = np.nan_to_num(self._observation(), nan=0.0, posinf=0.0, neginf=0.0)
-            obs = np.clip(obs, self.observation_space.low, self.observation_space.high)
+        self._k += 1
+        obs = self._observation()
+        if self._diverged(obs):
+            obs = np.clip(
+                np.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0),
+                self.observation_space.low,
+                self.observation_space.high,
+            )
             return obs, 0.0, True, False, {"diverged": True, "time": float(self.data.time)}
-        deviation, measured, predicted = self._compare()
-        reward = -deviation
+        info = self._step_info(obs, self._k)
         truncated = self.data.time >= self.episode_duration - 0.5 * self.model.opt.timestep
-        info = self._info(reward, measured, predicted, deviation)
-        return self._observation(), reward, False, bool(truncated), info
+        return obs, info["reward_deviation"], False, bool(truncated), info
 
     def render(self):
         if self.render_mode != "rgb_array":
@@ -166,27 +190,43 @@ class ScenarioEnv(gym.Env):
         self.episode_duration = float(self.scenario.duration(self._prediction))
         self._settings_record = read_settings(self.model)
         self._case = case
-        self._warnings0 = int(self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+        # Theory on the env's time grid, evaluated once (vectorised) so a step costs a table lookup.
+        self._env_dt = env_dt = self.model.opt.timestep * self.frame_skip
+        self._time0 = float(self.data.time)
+        n = int(np.ceil(self.episode_duration / env_dt)) + 2
+        self._k = 0
+        self._table = self._theory(self._time0 + env_dt * np.arange(n))
 
-    def _diverged(self) -> bool:
-        bad_acc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > self._warnings0
-        return bool(bad_acc or not (np.isfinite(self.data.qpos).all() and np.isfinite(self.data.qvel).all()))
+    def _step_info(self, obs: np.ndarray, k: int) -> dict[str, Any]:
+        predicted = self._table[k] if k < len(self._table) else self._theory(np.array([self.data.time]))[0]
+        measured = self._measure(obs)
+        deviation = self._deviation(measured, predicted)
+        names = self.observables
+        return {
+            "time": self.data.time,
+            "measured": dict(zip(names, np.asarray(measured).tolist(), strict=True)),
+            "predicted": dict(zip(names, predicted.tolist(), strict=True)),
+            "deviation": deviation,
+            "reward_deviation": -deviation,
+            "diverged": False,
+        }
+
+    def _compare(self) -> tuple[float, np.ndarray, np.ndarray]:
+        """Deviation, measured and predicted observables at the current state (any time, no table)."""
+        measured = self._measure(self._observation())
+        predicted = self._theory(np.array([self.data.time]))[0]
+        return self._deviation(measured, predicted), measured, predicted
+
+    def _diverged(self, obs: np.ndarray) -> bool:
+        """MuJoCo resets a blown-up state (bad qpos, qvel or qacc): time jumps back to ~0, and NaN never
+        persists. So a step that did not advance time by the expected amount, or a non-finite observation,
+        means the simulation diverged."""
+        time = self.data.time
+        expected = self._time0 + self._k * self._env_dt
+        return time < expected - 0.5 * self._env_dt or not math.isfinite(obs.sum())
 
     def _camera(self) -> int | str:
         return "side" if mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, "side") >= 0 else -1
-
-    def _info(self, reward: float, measured=None, predicted=None, deviation: float = 0.0) -> dict[str, Any]:
-        return {
-            "time": float(self.data.time),
-            "case": self._case,
-            "measured": measured or {},
-            "predicted": predicted or {},
-            "reward_deviation": float(reward),
-            "deviation": float(deviation),
-            "diverged": False,
-            "params": dict(self._actual),  # fresh dicts of immutable values: callers may keep them
-            "settings": dict(self._settings_record),
-        }
 
 
 def _settings(profile_name: str, integrator: str | None, timestep: float | None) -> Settings:

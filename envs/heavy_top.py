@@ -10,6 +10,7 @@ at t = 0, so the initial body rates are (theta_dot, phi_dot sin(theta), omega3).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -18,7 +19,7 @@ import numpy as np
 
 from rigidbench import frames, signals
 from rigidbench.analytic import tops
-from rigidbench.envs.rotor import RotorEnv, RotorMotion
+from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia
 from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Gravity, Numeric, Param, Range, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
@@ -219,12 +220,7 @@ class HeavyTop(Scenario):
     checks = CHECKS
 
     def validate(self, params: Mapping[str, Any]) -> None:
-        i1, i3 = params["I1"], params["I3"]
-        if i3 > 2 * i1:
-            raise ValueError(
-                f"parameters I1 = {i1:g}, I3 = {i3:g} kg m^2 violate the triangle inequality I1 + I2 >= I3 "
-                "(I2 = I1, about the CM): no rigid body has these moments"
-            )
+        require_rigid_body_inertia(params["I1"], params["I1"], params["I3"], "I1 = I2, I3 (about the CM)")
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         theta = params["tilt"]
@@ -300,7 +296,7 @@ class HeavyTop(Scenario):
             "theta-min": _worst(
                 np.concatenate([theta_min, [theta[0]] if traj.qvel[0, 0] == 0 else []]), prediction["theta-min"]
             ),
-            "nutation-period": _mean_spacing(t_max),
+            "nutation-period": signals.mean_spacing(t_max),
             "mean-precession": float(np.diff(signals.interpolate(t, phi, t_max[[0, -1]]))[0] / (t_max[-1] - t_max[0]))
             if len(t_max) >= 2
             else float("nan"),
@@ -346,10 +342,6 @@ def _worst(values: np.ndarray, expected: float) -> float:
     return float(values[np.argmax(np.abs(values - expected))]) if values.size else float("nan")
 
 
-def _mean_spacing(times: np.ndarray) -> float:
-    return float((times[-1] - times[0]) / (len(times) - 1)) if len(times) >= 2 else float("nan")
-
-
 class HeavyTopEnv(RotorEnv):
     """``rigidbench/HeavyTop-v0``: the heavy symmetric top on a pivot, scored against theory every step.
 
@@ -387,11 +379,18 @@ class HeavyTopEnv(RotorEnv):
     scenario_cls = HeavyTop
     max_torque = 0.05
 
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        quat = self.data.qpos[:4]
-        e3 = frames.quat_to_matrix(quat)[:, 2]
-        theta = float(np.arctan2(np.hypot(e3[0], e3[1]), e3[2]))
+    observables = ("theta",)
+
+    def _theory(self, t: np.ndarray) -> np.ndarray:
         top = self.prediction["_theory"]
-        w = float(top.w(np.array([self.data.time]))[0])
-        theta_theory = top.theta_at_w(w)
-        return abs(theta - theta_theory) / np.pi, {"theta": theta}, {"theta": theta_theory}
+        return top.theta_at_w(top.w(t))[:, None]
+
+    def _measure(self, obs: np.ndarray) -> tuple[float]:
+        # body z-axis in the world: e3 = (2(xz + wy), 2(yz - wx), 1 - 2(x^2 + y^2)) for a unit quaternion,
+        # so sin(theta) = |(e3x, e3y)| = 2 sqrt((x^2 + y^2)(w^2 + z^2)).
+        w, x, y, z = obs[:4].tolist()
+        r2 = x * x + y * y
+        return (math.atan2(2.0 * math.sqrt(r2 * (w * w + z * z)), 1.0 - 2.0 * r2),)
+
+    def _deviation(self, measured: tuple[float], predicted: np.ndarray) -> float:
+        return abs(measured[0] - float(predicted[0])) / math.pi

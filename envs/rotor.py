@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import gymnasium as gym
 import mujoco
@@ -16,6 +16,32 @@ import numpy as np
 
 from rigidbench import frames
 from rigidbench.envs.base import ScenarioEnv
+from rigidbench.params import Numeric, Param, Range
+
+OMEGA_PARAM = Param(
+    "omega",
+    "rad/s",
+    "initial angular velocity in body principal axes (omega1, omega2, omega3)",
+    Range(-100, 100),
+    Numeric("omega"),
+    size=3,
+)
+
+
+def require_rigid_body_inertia(i1: float, i2: float, i3: float, names: str = "I1, I2, I3") -> None:
+    """Refuse principal moments that no rigid body has: each must be at most the sum of the other two.
+
+    Raises
+    ------
+    ValueError
+        Naming the parameters and their values (MuJoCo would refuse the model too).
+    """
+    a, b, c = sorted((i1, i2, i3))
+    if a + b < c:
+        raise ValueError(
+            f"parameters {names} = {i1:g}, {i2:g}, {i3:g} kg m^2 violate the triangle inequality "
+            "(each principal moment <= the sum of the other two): no rigid body has these moments"
+        )
 
 
 @dataclass(frozen=True)
@@ -83,7 +109,7 @@ def set_free_body_rotation(data: mujoco.MjData, omega_B: np.ndarray) -> None:
 
 class RotorEnv(ScenarioEnv):
     """Env plumbing for one rigid body turning about a point: observation [quaternion, body rates], action a
-    world-frame torque on the body (N m), clipped to +-`max_torque`. Subclasses implement `_compare`.
+    world-frame torque on the body (N m), clipped to +-`max_torque`. Subclasses say what is compared with theory.
 
     Observation (float64, shape (7,))
 
@@ -107,19 +133,33 @@ class RotorEnv(ScenarioEnv):
         return gym.spaces.Box(-self.max_torque, self.max_torque, shape=(3,), dtype=np.float64)
 
     def _observation(self) -> np.ndarray:
-        adr = self.model.jnt_qposadr[0]
-        quat = self.data.qpos[adr + (3 if self.model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE else 0) :][:4]
-        return np.concatenate([quat / np.linalg.norm(quat), self.data.qvel[-3:]])
+        # MuJoCo renormalises joint quaternions every step, so qpos holds a unit quaternion already.
+        return np.concatenate((self.data.qpos[self._quat], self.data.qvel[-3:]))
+
+    def _load(self, case: str, params) -> None:
+        super()._load(case, params)
+        adr = int(self.model.jnt_qposadr[0]) + (3 if self.model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE else 0)
+        self._quat = slice(adr, adr + 4)
+        self._torque = self.data.xfrc_applied[self.model.body(self.body).id, 3:6]  # a view
 
     def _apply_action(self, action: np.ndarray) -> None:
-        self.data.xfrc_applied[self.model.body(self.body).id, 3:6] = action
+        self._torque[:] = action
 
 
 class FreeRotorEnv(RotorEnv):
-    """A torque-free top's env: the theory is the body-frame omega(t) of the scenario's closed form."""
+    """A torque-free top's env: the theory is the body-frame omega(t) of the scenario's closed form.
 
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        omega_B = self.data.qvel[3:6].copy()
-        theory = self.prediction["_theory"].omega_body(np.array([self.data.time]))[0]
-        deviation = float(np.linalg.norm(omega_B - theory) / np.linalg.norm(theory))
-        return deviation, {"omega_body": omega_B}, {"omega_body": theory}
+    Reward: ``-|omega_B - omega_theory(t)| / |omega_theory(t)|``.
+    """
+
+    observables = ("omega1", "omega2", "omega3")
+
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        return self.prediction["_theory"].omega_body(t)
+
+    def _measure(self, obs: np.ndarray) -> np.ndarray:
+        return obs[4:7]
+
+    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        diff = measured - predicted
+        return float(np.sqrt(diff @ diff / (predicted @ predicted)))

@@ -1,17 +1,19 @@
 """The ``rigidbench`` command line.
 
 Exit status: 0 when every check passed; 1 when any check failed or a simulation diverged; 2 for bad usage
-(one line on stderr naming the problem, no traceback); 130 when interrupted.
+(one line on stderr naming the problem, no traceback); 130 when interrupted by Ctrl-C (SIGINT), 143 by SIGTERM,
+after writing every finished row (``--jsonl`` journals them as they finish; ``--resume`` continues).
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 from collections.abc import Sequence
 
-EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 
 
 class UsageError(Exception):
@@ -48,6 +50,15 @@ def _parser() -> argparse.ArgumentParser:
     p_run.add_argument("--integrator", help=f"override the integrator: {', '.join(INTEGRATORS)}")
     p_run.add_argument("--timestep", type=_positive_float, metavar="SECONDS", help="override the timestep (s)")
     p_run.add_argument("--json", metavar="PATH", help="write the results as JSON")
+    p_run.add_argument(
+        "--jsonl", metavar="PATH", help="journal: append each finished row as a JSON line as the run goes (resumable)"
+    )
+    p_run.add_argument(
+        "--resume",
+        metavar="PATH",
+        help="continue the run journaled in PATH (its targets and settings), skipping "
+        "finished cases; new rows are appended to PATH",
+    )
     p_run.add_argument("--junit", metavar="PATH", help="write the results as JUnit XML")
     p_run.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     return parser
@@ -95,28 +106,75 @@ def _cmd_list(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _cmd_run(args: argparse.Namespace) -> int:
-    from rigidbench import results, runner
+def _invocation(args: argparse.Namespace) -> dict:
+    return {
+        "targets": list(args.targets),
+        "profile": args.profile,
+        "sets": list(args.sets),
+        "integrator": args.integrator,
+        "timestep": args.timestep,
+    }
 
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    import mujoco
+
+    from rigidbench import journal, results, runner
+
+    previous: list[dict] = []
+    journal_path = args.jsonl
+    if args.resume:
+        try:
+            record = journal.read(args.resume)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        given = _invocation(args)
+        if given != _invocation(_parser().parse_args(["run"])) and given != record.header["invocation"]:
+            raise UsageError("--resume takes the targets and settings from the journal; give no others")
+        if record.header["mujoco"] != mujoco.__version__:
+            raise UsageError(
+                f"journal {args.resume!r} was written with mujoco {record.header['mujoco']}, this is "
+                f"{mujoco.__version__}: results would mix versions"
+            )
+        for key, value in record.header["invocation"].items():
+            setattr(args, key, value)
+        journal.rewrite(args.resume, record)  # drop a torn tail, if any
+        previous, journal_path = record.rows, args.resume
     try:  # every input is validated here, before anything is simulated
         settings = runner.settings_for(args.profile, args.integrator, args.timestep)
         jobs = runner.plan(args.targets, _parse_sets(args.sets), settings)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    done = {r["job"] for r in previous}
+    by_job = {job: [r for r in previous if r["job"] == job] for job in done}
+    todo = [job for job in jobs if job.name not in done]
+    if journal_path and not args.resume:
+        journal.start(journal_path, _invocation(args))
+    if args.resume and not args.quiet:
+        print(f"resuming: {len(jobs) - len(todo)} of {len(jobs)} cases already done", file=sys.stderr)
 
     def progress(i: int, n: int, job: runner.Job) -> None:
         if not args.quiet:
             print(f"[{i + 1}/{n}] {job.name} ...", file=sys.stderr, flush=True)
 
-    rows: list[dict] = []
     t0 = time.perf_counter()
+    interrupted = None
     try:
-        for batch in runner.execute(jobs, settings, progress=progress):
-            rows.extend(batch)
-    except KeyboardInterrupt:
-        print(f"rigidbench: interrupted after {len(rows)} checks", file=sys.stderr)
+        for job, batch in zip(todo, runner.execute(todo, settings, progress=progress), strict=False):
+            by_job[job.name] = batch
+            if journal_path:
+                journal.append(journal_path, job.name, batch)
+    except Interrupted as exc:
+        interrupted = exc
+    rows = [_strip(r) for job in jobs for r in by_job.get(job.name, [])]
+    if interrupted is not None:
+        print(
+            f"rigidbench: interrupted by {interrupted.name} after {len(by_job)} of {len(jobs)} cases; "
+            f"finished rows are in {journal_path or args.json or '(nowhere: use --jsonl)'}",
+            file=sys.stderr,
+        )
         _write(args, rows)
-        return EXIT_INTERRUPTED
+        return interrupted.status
     print(results.table(rows))
     print()
     if rows:
@@ -126,6 +184,23 @@ def _cmd_run(args: argparse.Namespace) -> int:
         )
     _write(args, rows)
     return EXIT_OK if rows and all(r["status"] == results.PASS for r in rows) else EXIT_FAIL
+
+
+def _strip(row: dict) -> dict:
+    return {k: v for k, v in row.items() if k not in ("job", "job_size")}
+
+
+class Interrupted(BaseException):
+    """SIGINT or SIGTERM during a run; the exit status is 128 + the signal number."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.status = 128 + signum
+        self.name = signal.Signals(signum).name
+
+
+def _raise_interrupted(signum: int, _frame: object) -> None:
+    raise Interrupted(signum)
 
 
 def _write(args: argparse.Namespace, rows: list[dict]) -> None:
@@ -146,7 +221,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                 return _cmd_list(args)
             except ValueError as exc:
                 raise UsageError(str(exc)) from None
-        return _cmd_run(args)
+        handlers = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
+        try:
+            return _cmd_run(args)
+        finally:
+            for sig, handler in handlers.items():
+                signal.signal(sig, handler)
     except UsageError as exc:
         print(f"rigidbench: error: {exc}", file=sys.stderr)
         return EXIT_USAGE

@@ -1,0 +1,123 @@
+"""dm_control view: `rigidbench.suite.load(scenario, task)` mirrors `dm_control.suite.load(domain, task)`.
+
+Returns a `dm_control.rl.control.Environment` whose `Physics` is built from the scenario's compiled model (the
+same MjSpec path as every other view) and whose `base.Task` delegates initial state, observation, action and
+reward to the scenario and its gymnasium env's hooks: nothing is re-implemented here.
+
+Needs the ``dm`` extra (``pip install -e ".[dm]"``): dm-control 1.0.50 fails on mujoco 4.0 (``flex_vertedge``),
+so that extra pins mujoco to 3.17.
+"""
+
+from __future__ import annotations
+
+import collections
+from collections.abc import Mapping
+from typing import Any
+
+import mujoco
+import numpy as np
+
+try:
+    from dm_control import mujoco as dm_mujoco
+    from dm_control.rl import control
+    from dm_control.suite import base
+    from dm_env import specs
+except ImportError as exc:  # pragma: no cover - exercised without the extra
+    raise ImportError("rigidbench.suite needs dm-control: pip install -e '.[dm]' (it pins mujoco to 3.17)") from exc
+
+from rigidbench import registry
+from rigidbench.settings import profile as _profile
+
+
+class Physics(dm_mujoco.Physics):
+    """A scenario's physics: the compiled model plus named quantities from the scenario's own hooks."""
+
+
+class ScenarioTask(base.Task):
+    """A dm_control task for one case of a scenario: the validation problem (zero action = textbook)."""
+
+    def __init__(self, scenario: str, case: str | None, params: Mapping[str, Any] | None, env, random=None):
+        super().__init__(random=random)
+        self.scenario = registry.get(scenario)
+        self.case = self.scenario.case(case).name
+        self.params = self.scenario.resolve(self.scenario.case(case), params)
+        self._env = env  # the gymnasium env whose hooks define observation, action and reward
+
+    def initialize_episode(self, physics: Physics) -> None:
+        model, data = physics.model.ptr, physics.data.ptr
+        with physics.reset_context():
+            self.scenario.initial_state(model, data, self.scenario.read_params(model))
+        self._bind(physics)
+        self._env._prediction = self.scenario.predict(model, data)
+
+    def _bind(self, physics: Physics) -> None:
+        self._env.model, self._env.data = physics.model.ptr, physics.data.ptr
+
+    def action_spec(self, physics: Physics) -> specs.BoundedArray:
+        space = self._env.action_space
+        return specs.BoundedArray(space.shape, np.float64, space.low, space.high, name="action")
+
+    def before_step(self, action, physics: Physics) -> None:
+        self._bind(physics)
+        self._env._apply_action(
+            np.clip(np.asarray(action, dtype=float), self._env.action_space.low, self._env.action_space.high)
+        )
+
+    def get_observation(self, physics: Physics) -> collections.OrderedDict:
+        self._bind(physics)
+        return collections.OrderedDict(observation=self._env._observation())
+
+    def get_reward(self, physics: Physics) -> float:
+        self._bind(physics)
+        deviation, _measured, _predicted = self._env._compare()
+        return -float(deviation)
+
+    def get_termination(self, physics: Physics) -> float | None:
+        data = physics.data.ptr
+        if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
+            return 0.0
+        if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0:
+            return 0.0
+        return None
+
+
+def load(
+    scenario: str,
+    task: str | None = None,
+    *,
+    task_kwargs: Mapping[str, Any] | None = None,
+    environment_kwargs: Mapping[str, Any] | None = None,
+) -> control.Environment:
+    """Load a scenario as a dm_control environment, like ``dm_control.suite.load(domain_name, task_name)``.
+
+    Parameters
+    ----------
+    scenario : str
+        Scenario slug (the "domain"), e.g. ``"heavy-top"``.
+    task : str, optional
+        Case name (the "task"), e.g. ``"nutation"``; default: the scenario's first case.
+    task_kwargs : mapping, optional
+        ``params`` (parameter overrides, SI), ``profile`` (settings profile), ``random`` (seed).
+    environment_kwargs : mapping, optional
+        Passed to `control.Environment` (e.g. ``time_limit``, ``n_sub_steps``); the default time limit is the
+        case's validation duration and ``n_sub_steps`` the gymnasium env's frame skip.
+
+    Raises
+    ------
+    ValueError
+        For an unknown scenario, case or parameter.
+    """
+    import gymnasium as gym
+
+    task_kwargs = dict(task_kwargs or {})
+    params = task_kwargs.pop("params", None)
+    profile_name = task_kwargs.pop("profile", "reference")
+    sc = registry.get(scenario)
+    env = gym.make(sc.env_id, case=task, params=params, profile=profile_name).unwrapped
+    model = sc.build(sc.resolve(sc.case(task), params), _profile(profile_name))
+    physics = Physics.from_model(dm_mujoco.wrapper.MjModel(model))
+    dm_task = ScenarioTask(scenario, task, params, env, random=task_kwargs.pop("random", None))
+    if task_kwargs:
+        raise ValueError(f"unknown task_kwargs {sorted(task_kwargs)}; valid: params, profile, random")
+    kwargs = {"time_limit": env.episode_duration, "n_sub_steps": env.frame_skip, **dict(environment_kwargs or {})}
+    return control.Environment(physics, dm_task, **kwargs)

@@ -1,0 +1,102 @@
+"""The command line: exit statuses, JSON and JUnit outputs, listing, bad input."""
+
+import json
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from rigidbench import cli
+
+
+def test_run_writes_json_with_every_row_field(tmp_path, capsys):
+    path = tmp_path / "r.json"
+    assert cli.main(["run", "--quiet", "heavy-top:nutation", "--json", str(path)]) == 0
+    doc = json.loads(path.read_text())
+    assert doc["rigidbench"] and doc["mujoco"]
+    rows = doc["results"]
+    assert rows and all(r["passed"] for r in rows)
+    for key in (
+        "scenario",
+        "case",
+        "check",
+        "unit",
+        "measured",
+        "expected",
+        "error",
+        "tolerance",
+        "passed",
+        "settings",
+        "params",
+        "tolerance_reason",
+        "theory",
+    ):
+        assert key in rows[0], key
+    assert rows[0]["settings"]["integrator"] == "RK4" and rows[0]["settings"]["timestep"] == 1e-4
+    out = capsys.readouterr().out
+    assert "theta-max" in out and "PASS" in out
+
+
+def test_failing_checks_exit_1_and_write_junit_failures(tmp_path):
+    path = tmp_path / "r.xml"
+    status = cli.main(["run", "--quiet", "heavy-top:nutation", "--profile", "mujoco-default", "--junit", str(path)])
+    assert status == 1
+    suite = ET.parse(path).getroot().find("testsuite")
+    assert suite.get("name") == "heavy-top" and int(suite.get("failures")) > 0
+    cases = suite.findall("testcase")
+    assert len(cases) == int(suite.get("tests"))
+    assert any(c.find("failure") is not None for c in cases)
+
+
+def test_overrides_override_integrator_and_timestep(tmp_path):
+    path = tmp_path / "r.json"
+    cli.main(
+        [
+            "run",
+            "--quiet",
+            "heavy-top:nutation",
+            "--integrator",
+            "implicitfast",
+            "--timestep",
+            "5e-4",
+            "--json",
+            str(path),
+        ]
+    )
+    settings = json.loads(path.read_text())["results"][0]["settings"]
+    assert settings["integrator"] == "implicitfast" and settings["timestep"] == 5e-4
+
+
+@pytest.mark.parametrize(
+    ("args", "named"),
+    [
+        (["--set", "mass=-1", "heavy-top"], "'mass'"),
+        (["--set", "bogus=1", "heavy-top"], "unknown parameter 'bogus'"),
+        (["--set", "I1=1", "--set", "I2=1.2", "--set", "I3=3", "free-asymmetric-top"], "triangle inequality"),
+        (["--set", "I3=5", "heavy-top"], "triangle inequality"),
+        (["--integrator", "leapfrog", "heavy-top"], "integrator 'leapfrog'"),
+        (["heavy-top:no-such-case"], "unknown case"),
+        (["no-such-scenario"], "unknown scenario"),
+        (["--set", "omega=1,2", "free-symmetric-top"], "'omega'"),
+        (["--set", "tilt", "heavy-top"], "NAME=VALUE"),
+        (["--profile", "fastest", "heavy-top"], "profile 'fastest'"),
+        (["--set", "tilt=4", "heavy-top"], "'tilt'"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line_naming_the_problem(args, named, capsys):
+    assert cli.main(["run", "--quiet", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and named in err[0] and "Traceback" not in err[0]
+
+
+def test_list_shows_parameters_with_units_defaults_and_ranges(capsys):
+    assert cli.main(["list", "heavy-top"]) == 0
+    out = capsys.readouterr().out
+    assert "spin" in out and "[rad/s]" in out and "default 150" in out and "range" in out
+    assert "nutation-period" in out and "sleeping" in out
+
+
+def test_python_dash_m_runs_the_same_cli():
+    done = subprocess.run([sys.executable, "-m", "rigidbench", "list"], capture_output=True, text=True, check=False)
+    assert done.returncode == 0 and "free-asymmetric-top" in done.stdout

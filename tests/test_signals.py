@@ -1,0 +1,39 @@
+"""Event measurement below the sampling step (rigidbench.signals) against exact answers."""
+
+import numpy as np
+import pytest
+
+from rigidbench import params, signals
+
+
+def test_crossings_of_a_sampled_sine_are_exact_to_step_to_the_fourth():
+    h = 1e-3
+    t = np.arange(0, 10, h)
+    omega = 3.0
+    found = signals.crossings(t, np.sin(omega * t + 0.3), direction=1)
+    exact = (2 * np.pi * np.arange(1, 5) - 0.3) / omega
+    assert np.abs(found - exact[: len(found)]).max() < (omega * h) ** 4
+
+
+def test_extrema_from_exact_derivative_give_peak_values():
+    t = np.arange(0, 5, 1e-3)
+    y, dy = 2 * np.cos(4 * t - 0.1), -8 * np.sin(4 * t - 0.1)
+    times, values = signals.extrema(t, y, dy, "max")
+    assert np.allclose(values, 2.0, atol=1e-12)
+    assert np.allclose(np.cos(4 * times - 0.1), 1.0, atol=1e-12)
+
+
+def test_phase_rate_of_uniform_rotation():
+    t = np.linspace(0, 20, 5001)
+    assert signals.phase_rate(t, np.angle(np.exp(1j * (-2.5 * t + 1.0)))) == pytest.approx(-2.5, rel=1e-13)
+
+
+def test_param_check_names_parameter_value_and_range():
+    p = params.Param("mass", "kg", "mass", params.positive(10.0), params.BodyMass("b"))
+    with pytest.raises(ValueError, match=r"'mass' = -1 kg is outside the valid range \(0, 10\] kg"):
+        p.check(-1)
+    with pytest.raises(ValueError, match="not finite"):
+        p.check(float("inf"))
+    with pytest.raises(ValueError, match="expected a number"):
+        p.check([1.0, 2.0])
+    assert p.parse("2.5") == 2.5

@@ -1,0 +1,206 @@
+"""The tops' closed forms alone (THEORY.md sections 2-4), against limits, identities and an independent ODE.
+
+The independent reference integrates Euler's equations (torque-free) or the Euler-angle Lagrange equations of
+the heavy top with scipy's DOP853 at rtol = atol = 1e-12; its own error (~1e-10 over these spans) sets the
+tolerances below.
+"""
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from rigidbench.analytic import tops
+
+ODE = {"method": "DOP853", "rtol": 1e-12, "atol": 1e-12, "dense_output": True}
+
+
+def euler_torque_free(inertia):
+    i1, i2, i3 = inertia
+
+    def rhs(_t, w):
+        return [(i2 - i3) * w[1] * w[2] / i1, (i3 - i1) * w[2] * w[0] / i2, (i1 - i2) * w[0] * w[1] / i3]
+
+    return rhs
+
+
+@pytest.mark.parametrize(("i_perp", "i_3"), [(2.0, 0.8), (1.0, 1.7)], ids=["prolate", "oblate"])
+def test_symmetric_top_omega_matches_euler_equations(i_perp, i_3):
+    omega0 = [0.3, -0.2, 5.0]
+    top = tops.symmetric_top(i_perp, i_3, omega0)
+    sol = solve_ivp(euler_torque_free((i_perp, i_perp, i_3)), (0, 10), omega0, **ODE)
+    t = np.linspace(0, 10, 501)
+    assert np.abs(top.omega_body(t) - sol.sol(t).T).max() < 1e-9
+
+
+def test_symmetric_top_cone_angles_obey_wilcox_11_45():
+    """tan(beta) / tan(alpha) = I_perp / I3: prolate beta > alpha, oblate beta < alpha."""
+    prolate = tops.symmetric_top(2.0, 0.8, [0.3, 0.2, 5.0])
+    oblate = tops.symmetric_top(1.0, 1.7, [0.3, 0.2, 5.0])
+    for top in (prolate, oblate):
+        ratio = np.tan(top.beta) / np.tan(top.alpha)
+        assert ratio == pytest.approx(top.inertia_perp / top.inertia_axial, rel=1e-14)
+    assert prolate.beta > prolate.alpha
+    assert oblate.beta < oblate.alpha
+
+
+def test_symmetric_top_precession_rate_matches_wilcox_11_51():
+    """phi_dot = |Omega_b| sin(alpha) / |sin(beta - alpha)| (Wilcox 11.51) equals |L| / I_perp."""
+    top = tops.symmetric_top(2.0, 0.8, [0.3, 0.2, 5.0])
+    wilcox = abs(top.body_rate) * np.sin(top.alpha) / abs(np.sin(top.beta - top.alpha))
+    assert top.precession_rate == pytest.approx(wilcox, rel=1e-13)
+
+
+SIGN_PATTERNS = [[0.3, 1.0, 2.0], [-0.3, 0.5, -2.0], [1.0, -2.0, -0.3], [2.0, 0.5, 0.3], [-2.0, -0.5, 0.3]]
+
+
+@pytest.mark.parametrize("omega0", SIGN_PATTERNS)
+def test_asymmetric_top_elliptic_solution_matches_euler_equations(omega0):
+    inertia = (1.0, 2.0, 2.5)
+    top = tops.asymmetric_top(inertia, omega0)
+    sol = solve_ivp(euler_torque_free(inertia), (0, 30), omega0, **ODE)
+    t = np.linspace(0, 30, 1501)
+    assert np.abs(top.omega_body(t) - sol.sol(t).T).max() < 1e-8
+
+
+def test_asymmetric_top_period_is_time_for_omega2_to_repeat():
+    inertia = (1.0, 2.0, 2.5)
+    top = tops.asymmetric_top(inertia, [0.05, 0.1, 3.0])
+    w_later = top.omega_body(np.array([0.3 + top.period]))
+    assert np.allclose(w_later, top.omega_body(np.array([0.3])), atol=1e-12, rtol=0)
+    half = top.omega_body(np.array([0.3 + top.reversal_time]))[0]
+    assert half[1] == pytest.approx(-top.omega_body(np.array([0.3]))[0, 1], rel=1e-10)
+
+
+@pytest.mark.parametrize("eps", [np.radians(10), np.radians(1), np.radians(0.1)])
+def test_harter_kim_flip_time_equals_half_period_of_elliptic_solution(eps):
+    """THEORY.md A3: T_rev = 2 K / s from W (0, cos eps, sin eps) (Harter & Kim eqs 14-17)."""
+    inertia = (1.0, 2.0, 2.5)
+    spin = 3.0
+    top = tops.asymmetric_top(inertia, [0.0, spin * np.cos(eps), spin * np.sin(eps)])
+    assert top.about_major
+    assert tops.flip_time(inertia, spin, eps) == pytest.approx(top.reversal_time, rel=1e-13)
+
+
+def test_flip_time_tends_to_logarithmic_law_as_tilt_vanishes():
+    """THEORY.md A3/C6: T_rev ~ (2/lambda) ln(4/k'), with an error that falls like eps^2."""
+    inertia = (1.0, 2.0, 2.5)
+    i1, i2, i3 = inertia
+    lam = tops.intermediate_axis_growth_rate(inertia, 1.0)
+    errors = []
+    for eps in (1e-2, 1e-3):
+        k_prime = eps * np.sqrt(i3 * (i3 - i1) / (i2 * (i2 - i1)))
+        approx = 2 / lam * np.log(4 / k_prime)
+        errors.append(abs(tops.flip_time(inertia, 1.0, eps) / approx - 1))
+    assert errors[1] < errors[0] / 50  # eps^2 scaling would give /100
+
+
+def test_intermediate_axis_growth_rate_matches_linearised_euler_equations():
+    """A4: from omega = (1e-9, 1, 0) the growth over t in [15, 25] is lambda to O(e^{-2 lambda t}) ~ 1e-6."""
+    inertia = (1.0, 2.0, 2.5)
+    ode = {**ODE, "atol": 1e-22}
+    sol = solve_ivp(euler_torque_free(inertia), (0, 25), [1e-9, 1.0, 0.0], **ode)
+    t = np.linspace(15, 25, 50)
+    slope = np.polyfit(t, np.log(np.abs(sol.sol(t)[0])), 1)[0]
+    assert slope == pytest.approx(tops.intermediate_axis_growth_rate(inertia, 1.0), rel=1e-5)
+
+
+def test_separatrix_start_is_refused():
+    with pytest.raises(ValueError, match="separatrix"):
+        tops.asymmetric_top((1.0, 2.0, 2.5), [0.0, 1.0, 0.0])
+
+
+# ---- heavy top ---------------------------------------------------------------------------------------------
+
+I1, I3, MGH = 1.2e-4, 4.5e-5, 0.1 * 9.81 * 0.03
+
+
+def lagrange_top(i1, i3, mgh, spin):
+    """theta, phi, theta_dot with p_phi, p_psi conserved (Wilcox 11.59-11.62), u = cos(theta)."""
+
+    def rhs(_t, y, p_phi):
+        theta, _phi, theta_dot = y
+        s, c = np.sin(theta), np.cos(theta)
+        p_psi = i3 * spin
+        phi_dot = (p_phi - p_psi * c) / (i1 * s * s)
+        theta_ddot = (phi_dot**2 * s * c * i1 - p_psi * phi_dot * s + mgh * s) / i1
+        return [theta_dot, phi_dot, theta_ddot]
+
+    return rhs
+
+
+@pytest.mark.parametrize(
+    ("tilt", "precession", "tilt_rate", "spin"),
+    [(0.5, 0.0, 0.0, 150.0), (0.5, -4.7, 0.0, 150.0), (0.7, 3.0, 2.0, 80.0), (0.7, 0.0, 0.0, 40.0)],
+    ids=["cusped", "looping", "monotonic-moving-start", "slow-spin"],
+)
+def test_heavy_top_closed_form_matches_lagrange_equations(tilt, precession, tilt_rate, spin):
+    top = tops.heavy_top(I1, I3, MGH, tilt=tilt, tilt_rate=tilt_rate, precession=precession, spin=spin)
+    p_phi = I1 * precession * np.sin(tilt) ** 2 + I3 * spin * np.cos(tilt)
+    T = 3 * top.nutation_period
+    sol = solve_ivp(lagrange_top(I1, I3, MGH, spin), (0, T), [tilt, 0.0, tilt_rate], args=(p_phi,), **ODE)
+    t = np.linspace(0, T, 2001)
+    theta = sol.sol(t)[0]
+    assert np.abs(np.cos(theta) - top.u(t)).max() < 1e-9  # T3: u(t) = u1 + (u2 - u1) sn^2(nu (t - t1))
+    assert theta.max() == pytest.approx(top.theta_max, rel=1e-6)  # sampled maximum: grid-limited
+    ta = top.t_max_tilt % top.nutation_period  # a time of largest tilt within the first period
+    advance = sol.sol(ta + top.nutation_period)[1] - sol.sol(ta)[1]
+    assert advance / top.nutation_period == pytest.approx(top.mean_precession_rate, rel=1e-8)
+
+
+def test_heavy_top_turning_points_are_roots_of_the_cubic():
+    top = tops.heavy_top(I1, I3, MGH, tilt=0.7, tilt_rate=2.0, precession=3.0, spin=80.0)
+    alpha = top.beta * top.u0 + (2.0**2 + 3.0**2 * np.sin(0.7) ** 2)
+
+    def f(u):
+        return (1 - u * u) * (alpha - top.beta * u) - (top.b - top.a * u) ** 2
+
+    for u in top.roots:
+        assert abs(f(u)) < 1e-9 * alpha
+    u1, u2, u3 = top.roots
+    assert -1 <= u1 <= np.cos(0.7) <= u2 <= 1 <= u3
+
+
+def test_steady_precession_roots_keep_tilt_constant():
+    """T4: at either root the cubic has a double root at u0, so theta_max = theta_min = theta0."""
+    for root in tops.steady_precession_rates(I1, I3, MGH, 150.0, 0.5):
+        top = tops.heavy_top(I1, I3, MGH, tilt=0.5, tilt_rate=0.0, precession=root, spin=150.0)
+        assert top.theta_max == pytest.approx(0.5, abs=1e-12)
+        assert top.theta_min == pytest.approx(0.5, abs=1e-12)
+
+
+def test_slow_precession_tends_to_gyroscopic_limit():
+    """T4: slow root -> M g h / (I3 omega3) as the spin grows; relative gap O(I1 M g h / (I3 omega3)^2)."""
+    gaps = []
+    for spin in (1e3, 1e4):
+        slow, _fast = tops.steady_precession_rates(I1, I3, MGH, spin, 0.5)
+        gaps.append(abs(slow / (MGH / (I3 * spin)) - 1))
+    assert gaps[1] < gaps[0] / 90
+
+
+def test_steady_precession_needs_enough_spin_above_horizontal():
+    with pytest.raises(ValueError, match="no steady precession"):
+        tops.steady_precession_rates(I1, I3, MGH, 10.0, 0.3)
+
+
+def test_sleeping_threshold_of_spinning_sphere_is_wilcox_problem_11_13():
+    """A solid sphere spinning on its bottom point: I1 = 7MR^2/5, I3 = 2MR^2/5, h = R => omega = sqrt(35 g / R)."""
+    m, r, g = 0.2, 0.05, 9.81
+    threshold = tops.sleeping_threshold(7 * m * r * r / 5, 2 * m * r * r / 5, m * g * r)
+    assert threshold == pytest.approx(np.sqrt(35 * g / r), rel=1e-14)
+
+
+def test_sleeping_max_tilt_approaches_exact_cubic_root_as_tilt_vanishes():
+    spin = 1.5 * tops.sleeping_threshold(I1, I3, MGH)
+    errors = []
+    for tilt in (1e-2, 1e-3):
+        exact = tops.heavy_top(I1, I3, MGH, tilt=tilt, tilt_rate=0.0, precession=0.0, spin=spin).theta_max
+        errors.append(abs(tops.sleeping_max_tilt(I1, I3, MGH, spin, tilt) / exact - 1))
+    assert errors[1] < errors[0] / 50  # O(theta0^2)
+
+
+def test_fast_top_nutation_frequency_tends_to_a():
+    """T7: for a fast top released at rest, the nutation frequency -> a = I3 omega3 / I1 (error O(beta/a^2))."""
+    for spin in (1e3, 1e4):
+        top = tops.heavy_top(I1, I3, MGH, tilt=0.5, tilt_rate=0.0, precession=0.0, spin=spin)
+        a = I3 * spin / I1
+        assert 2 * np.pi / top.nutation_period == pytest.approx(a, rel=3 * top.beta / a**2)
