@@ -204,17 +204,25 @@ class BallStickEnv(BlowEnv):
     scenario_cls = BallStick
     body = "stick"
 
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        s = self._state()
-        theory = self.prediction["_theory"].stick
-        t = float(self.data.time)
-        measured = {"v_x": float(s.v_W[0, 0]), "omega_z": float(s.omega_W[0, 2])}
+    observables = ("v_x", "omega_z")
+
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        stick = self.prediction["_theory"].stick
+        t = np.asarray(t)
         hit = self.prediction["_t_hit"]
-        if hit < t < hit + self.prediction["_t_contact"]:  # inside the contact: no closed form to score against
-            return 0.0, measured, dict(measured)
-        after = t >= hit
-        predicted = {"v_x": theory.com_velocity * after, "omega_z": theory.angular_velocity * after}
-        deviation = abs(measured["v_x"] - predicted["v_x"]) / theory.com_velocity + abs(
-            measured["omega_z"] - predicted["omega_z"]
-        ) / abs(theory.angular_velocity)
-        return float(deviation), measured, predicted
+        after = (t >= hit).astype(float)
+        out = np.stack([stick.com_velocity * after, stick.angular_velocity * after], axis=1)
+        out[(t > hit) & (t < hit + self.prediction["_t_contact"])] = np.nan  # inside the contact: not scored
+        return out
+
+    def _measure(self, obs: np.ndarray) -> np.ndarray:
+        return obs[[3, 5]]
+
+    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        if np.isnan(predicted).any():
+            return 0.0
+        stick = self.prediction["_theory"].stick
+        return float(
+            abs(measured[0] - predicted[0]) / stick.com_velocity
+            + abs(measured[1] - predicted[1]) / abs(stick.angular_velocity)
+        )

@@ -351,19 +351,16 @@ class CueStrikeEnv(BlowEnv):
     def _apply_action(self, action: np.ndarray) -> None:
         self.data.xfrc_applied[self.model.body(self.body).id] = [action[0], 0.0, 0.0, 0.0, action[1], 0.0]
 
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        theory: percussion.SkidToRoll = self.prediction["_theory"]
-        s = self._state()
-        x, v, u = theory.state(np.array([self.data.time]))
-        predicted = {
-            "x": float(x[0]) + self.prediction["_x_offset"],
-            "v_x": float(v[0]),
-            "slip": float(u[0]),
-        }
-        measured = {
-            "x": float(s.com_W[0, 0]),
-            "v_x": float(s.v_W[0, 0]),
-            "slip": float(CueStrike.slip(self.model, s)[0]),
-        }
+    observables = ("x", "v_x", "slip")
+
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        x, v, u = self.prediction["_theory"].state(t)
+        return np.stack([x + self.prediction["_x_offset"], v, u], axis=1)
+
+    def _measure(self, obs: np.ndarray) -> np.ndarray:
+        return obs[[0, 2, 5]]
+
+    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        theory = self.prediction["_theory"]
         scale = max(abs(theory.skid_distance), theory.radius)  # the length scale of the problem
-        return abs(measured["x"] - predicted["x"]) / scale, measured, predicted
+        return float(abs(measured[0] - predicted[0]) / scale)

@@ -223,15 +223,15 @@ class MarbleShotEnv(BlowEnv):
     scenario_cls = MarbleShot
     body = "stick"
 
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        s = self._state()
-        theory = self.prediction["_theory"]
-        t = float(self.data.time) - 0.5 * self.prediction["_tau"]
-        measured = {"x": float(s.com_W[0, 0]), "y": float(s.com_W[0, 1]), "heading": float(s.heading[0])}
-        if self.data.time >= self.prediction["_t_first_hit"]:
-            return 0.0, measured, dict(measured)
-        predicted = {"x": theory.com_velocity * t, "y": 0.0, "heading": theory.angular_velocity * t}
-        deviation = (abs(measured["x"] - predicted["x"]) + abs(measured["y"])) / self.params["length"] + abs(
-            measured["heading"] - predicted["heading"]
-        ) / np.pi
-        return float(deviation), measured, predicted
+    observables = ("x", "y", "heading")
+
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        pose = self._stick_pose_theory(t)
+        pose[np.asarray(t) >= self.prediction["_t_first_hit"]] = np.nan  # not scored after the first collision
+        return pose
+
+    def _measure(self, obs: np.ndarray) -> np.ndarray:
+        return obs[:3]
+
+    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        return self._pose_deviation(measured, predicted)

@@ -209,12 +209,15 @@ class PivotedStickEnv(BlowEnv):
     scenario_cls = PivotedStick
     body = "stick"
 
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        s = self._state()
-        t = float(self.data.time) - 0.5 * self.prediction["_tau"]
-        measured = {"heading": float(s.heading[0]), "pin_drift": float(np.linalg.norm(s.com_W[0]))}
-        predicted = {"heading": self.prediction["angular-velocity"] * t, "pin_drift": 0.0}
-        deviation = (
-            abs(measured["heading"] - predicted["heading"]) / np.pi + measured["pin_drift"] / self.params["length"]
-        )
-        return float(deviation), measured, predicted
+    observables = ("heading", "pin_drift")
+
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        tp = np.asarray(t) - 0.5 * self.prediction["_tau"]
+        return np.stack([self.prediction["angular-velocity"] * tp, np.zeros_like(tp)], axis=1)
+
+    def _measure(self, obs: np.ndarray) -> np.ndarray:
+        return np.array([obs[2], np.hypot(obs[0], obs[1])])
+
+    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        dh = (measured[0] - predicted[0] + np.pi) % (2 * np.pi) - np.pi
+        return float(abs(dh) / np.pi + measured[1] / self.params["length"])

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import gymnasium as gym
 import mujoco
@@ -115,14 +115,12 @@ class BlowEnv(ScenarioEnv):
     body: ClassVar[str]
     max_force: ClassVar[float] = 0.1
 
-    def reset(self, *, seed: int | None = None, options=None):
-        super().reset(seed=seed, options=options)
+    def _begin(self) -> None:
         if self.model.nu:  # a model with an actuator is struck by a pulse (rigidbench.pulse)
             for row in self.scenario.control(self.model, self.model.opt.timestep, pulse.steps(self.model)):
                 self.data.ctrl[:] = row
                 mujoco.mj_step(self.model, self.data)
             self.data.ctrl[:] = 0.0
-        return self._observation(), self._info(0.0)
 
     def _observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(6,), dtype=np.float64)
@@ -140,5 +138,18 @@ class BlowEnv(ScenarioEnv):
     def _apply_action(self, action: np.ndarray) -> None:
         self.data.xfrc_applied[self.model.body(self.body).id] = [action[0], action[1], 0.0, 0.0, 0.0, action[2]]
 
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        raise NotImplementedError
+    def _stick_pose_theory(self, t: np.ndarray) -> np.ndarray:
+        """(x, y, heading) of a stick struck by the scenario's blow, free afterwards (P1): CM at V t', heading
+        omega t', with t' = t - tau/2 from the pulse's centroid; shape (len(t), 3)."""
+        theory = self.prediction["_theory"]
+        tp = np.asarray(t) - 0.5 * self.prediction["_tau"]
+        return np.stack([theory.com_velocity * tp, np.zeros_like(tp), theory.angular_velocity * tp], axis=1)
+
+    def _pose_deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        """(|dx| + |dy|) / L + |d heading| / pi (heading difference wrapped to (-pi, pi]); 0 where the theory
+        is NaN (not scored)."""
+        if np.isnan(predicted).any():
+            return 0.0
+        dx, dy = measured[0] - predicted[0], measured[1] - predicted[1]
+        dh = (measured[2] - predicted[2] + np.pi) % (2 * np.pi) - np.pi
+        return float((abs(dx) + abs(dy)) / self.params["length"] + abs(dh) / np.pi)

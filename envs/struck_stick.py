@@ -20,7 +20,7 @@ import numpy as np
 
 from rigidbench import pulse, signals
 from rigidbench.analytic import percussion
-from rigidbench.envs.planar import BlowEnv, PlanarMotion, free_body_motion
+from rigidbench.envs.planar import BlowEnv, free_body_motion
 from rigidbench.params import Numeric, Param, RodLength, ScaledBodyMass, SitePosition, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
@@ -248,14 +248,13 @@ class StruckStickEnv(BlowEnv):
     scenario_cls = StruckStick
     body = "stick"
 
-    def _compare(self) -> tuple[float, dict[str, Any], dict[str, Any]]:
-        s: PlanarMotion = self._state()
-        theory = self.prediction["_theory"]
-        t = float(self.data.time) - 0.5 * self.prediction["_tau"]
-        measured = {"x": float(s.com_W[0, 0]), "y": float(s.com_W[0, 1]), "heading": float(s.heading[0])}
-        predicted = {"x": theory.com_velocity * t, "y": 0.0, "heading": theory.angular_velocity * t}
-        length = self.params["length"]
-        deviation = (abs(measured["x"] - predicted["x"]) + abs(measured["y"]) + 0.0) / length + abs(
-            measured["heading"] - predicted["heading"]
-        ) / np.pi
-        return float(deviation), measured, predicted
+    observables = ("x", "y", "heading")
+
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        return self._stick_pose_theory(t)
+
+    def _measure(self, obs: np.ndarray) -> np.ndarray:
+        return obs[:3]
+
+    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        return self._pose_deviation(measured, predicted)

@@ -83,9 +83,9 @@ def test_default_contact_makes_rolling_late_and_the_ball_hop():
 
 
 @pytest.mark.filterwarnings("ignore:.*Box observation space (minimum|maximum) value is:UserWarning")
-@pytest.mark.parametrize("env_id", ENVS)
-def test_env_passes_gymnasiums_checker_and_tracks_theory(env_id):
-    env = gym.make(env_id)
+@pytest.mark.parametrize("percussion_env", ENVS)
+def test_env_passes_gymnasiums_checker_and_tracks_theory(percussion_env):
+    env = gym.make(percussion_env)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         check_env(env.unwrapped, skip_render_check=True)
@@ -99,9 +99,9 @@ def test_env_passes_gymnasiums_checker_and_tracks_theory(env_id):
     env.close()
 
 
-@pytest.mark.parametrize("env_id", ENVS)
-def test_env_renders_rgb_array_headless(env_id):
-    env = gym.make(env_id, render_mode="rgb_array", width=96, height=64)
+@pytest.mark.parametrize("percussion_env", ENVS)
+def test_env_renders_rgb_array_headless(percussion_env):
+    env = gym.make(percussion_env, render_mode="rgb_array", width=96, height=64)
     env.reset(seed=0)
     try:
         frame = env.render()
