@@ -66,15 +66,15 @@ class BallStick(Scenario):
     title = "Ball striking a free stick elastically: effective mass, the ball that stops"
     env_id = "rigidbench/BallStick-v0"
     params = (
-        Param("mass", "kg", "mass M of the stick", positive(1e3), ScaledBodyMass("stick")),
+        Param("mass", "kg", "mass M of the stick", Range(1e-6, 1e3), ScaledBodyMass("stick")),
         Param(
             "length",
             "m",
             "full length L of the uniform stick; I = M L^2 / 12 about its centre",
-            positive(100.0),
+            Range(1e-3, 100.0),
             RodLength("stick", "stick"),
         ),
-        Param("ball_mass", "kg", "mass m of the ball", positive(1e3), ScaledBodyMass("ball")),
+        Param("ball_mass", "kg", "mass m of the ball", Range(1e-6, 1e3), ScaledBodyMass("ball")),
         Param(
             "ball_speed", "m/s", "speed u of the ball along +x before impact", positive(100.0), Numeric("ball_speed")
         ),

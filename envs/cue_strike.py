@@ -155,8 +155,10 @@ class CueStrike(Scenario):
     title = "Billiard ball struck by a cue: no-skid height 2R/5, skid to roll under Coulomb friction"
     env_id = "rigidbench/CueStrike-v0"
     params = (
-        Param("radius", "m", "radius R of the solid ball (I = 2/5 M R^2)", positive(1.0), SphereRadius("ball", "ball")),
-        Param("mass", "kg", "mass M of the ball", positive(100.0), ScaledBodyMass("ball")),
+        Param(
+            "radius", "m", "radius R of the solid ball (I = 2/5 M R^2)", Range(1e-3, 1.0), SphereRadius("ball", "ball")
+        ),
+        Param("mass", "kg", "mass M of the ball", Range(1e-6, 100.0), ScaledBodyMass("ball")),
         Param(
             "mu",
             "1",

@@ -52,8 +52,10 @@ class CushionRebound(CueStrike):
     title = "Rolling ball rebounding from a cushion: no skid at 7/10 of the diameter"
     env_id = "rigidbench/CushionRebound-v0"
     params = (
-        Param("radius", "m", "radius R of the solid ball (I = 2/5 M R^2)", positive(1.0), SphereRadius("ball", "ball")),
-        Param("mass", "kg", "mass M of the ball", positive(100.0), ScaledBodyMass("ball")),
+        Param(
+            "radius", "m", "radius R of the solid ball (I = 2/5 M R^2)", Range(1e-3, 1.0), SphereRadius("ball", "ball")
+        ),
+        Param("mass", "kg", "mass M of the ball", Range(1e-6, 100.0), ScaledBodyMass("ball")),
         Param(
             "mu",
             "1",

@@ -30,7 +30,7 @@ import numpy as np
 from rigidbench import contact, pulse
 from rigidbench.analytic import percussion
 from rigidbench.envs.planar import BlowEnv, body_state, free_body_motion
-from rigidbench.params import Numeric, Param, RodLength, ScaledBodyMass, SitePosition, positive
+from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
 
@@ -84,12 +84,12 @@ class MarbleShot(Scenario):
     title = "Meter stick on ice with marbles: struck so the centre of percussion is at A, A stays, C flies"
     env_id = "rigidbench/MarbleShot-v0"
     params = (
-        Param("mass", "kg", "mass M of the stick", positive(1e3), ScaledBodyMass("stick")),
+        Param("mass", "kg", "mass M of the stick", Range(1e-6, 1e3), ScaledBodyMass("stick")),
         Param(
             "length",
             "m",
             "full length L of the uniform stick; I = M L^2 / 12; the marbles sit at its ends",
-            positive(100.0),
+            Range(1e-3, 100.0),
             RodLength("stick", "stick"),
         ),
         Param(

@@ -26,7 +26,7 @@ import numpy as np
 from rigidbench import pulse
 from rigidbench.analytic import percussion
 from rigidbench.envs.planar import BlowEnv, free_body_motion
-from rigidbench.params import Numeric, Param, RodLength, ScaledBodyMass, SitePosition, positive
+from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
 
@@ -76,12 +76,12 @@ class PivotedStick(Scenario):
     title = "Stick on a pivot struck perpendicularly: pivot reaction impulse, sweet spot at 2L/3"
     env_id = "rigidbench/PivotedStick-v0"
     params = (
-        Param("mass", "kg", "mass M of the stick", positive(1e3), ScaledBodyMass("stick")),
+        Param("mass", "kg", "mass M of the stick", Range(1e-6, 1e3), ScaledBodyMass("stick")),
         Param(
             "length",
             "m",
             "full length L of the uniform stick, pivoted at one end; I_O = M L^2 / 3",
-            positive(100.0),
+            Range(1e-3, 100.0),
             RodLength("stick", "stick", from_origin=True),
         ),
         Param("impulse", "N s", "impulse Pi of the blow, along +x (world)", positive(1e3), Numeric("impulse")),

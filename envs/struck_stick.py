@@ -21,7 +21,7 @@ import numpy as np
 from rigidbench import pulse, signals
 from rigidbench.analytic import percussion
 from rigidbench.envs.planar import BlowEnv, free_body_motion
-from rigidbench.params import Numeric, Param, RodLength, ScaledBodyMass, SitePosition, positive
+from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
 
@@ -105,12 +105,14 @@ class StruckStick(Scenario):
     title = "Stick on frictionless ice struck off-centre: centre of percussion and cycloid"
     env_id = "rigidbench/StruckStick-v0"
     params = (
-        Param("mass", "kg", "mass M of the stick (its inertia scales with it)", positive(1e3), ScaledBodyMass("stick")),
+        Param(
+            "mass", "kg", "mass M of the stick (its inertia scales with it)", Range(1e-6, 1e3), ScaledBodyMass("stick")
+        ),
         Param(
             "length",
             "m",
             "full length L of the uniform stick; I = M L^2 / 12 about its centre",
-            positive(100.0),
+            Range(1e-3, 100.0),
             RodLength("stick", "stick"),
         ),
         Param("impulse", "N s", "impulse Pi of the blow, along +x (world)", positive(1e3), Numeric("impulse")),
