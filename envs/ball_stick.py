@@ -185,7 +185,8 @@ class BallStickEnv(BlowEnv):
     Rewards
         ``reward = -|v_x - V_theory(t)| / V - |omega_z - omega_theory(t)| / |omega|`` (0 before the impact,
         after it the P5 values; during the 0.31 ms contact the stick's velocity is in between and the deviation
-        is not scored): the negative deviation of the stick's velocities from the closed form.
+        is not scored, and ``info["predicted"]`` holds NaN): the negative deviation of the stick's velocities from
+        the closed form.
 
     Starting State
         Stick at rest at the origin along y; ball 2 mm from its face moving at ``ball_speed``.

@@ -204,7 +204,8 @@ class MarbleShotEnv(BlowEnv):
     Rewards
         ``reward = -(|x - V t'| + |y|) / L - |heading - omega t'| / pi`` until the first marble is hit (t' from
         the pulse's centroid; as `StruckStickEnv`), 0 afterwards (no closed form for the stick's motion through
-        the collisions): the negative deviation of the stick's pose from P1.
+        the collisions; ``info["predicted"]`` then holds NaN): the negative deviation of the stick's pose
+        from P1.
 
     Starting State
         Stick at rest at the origin, marbles at rest 1 mm in front of its ends, then struck during ``reset``.

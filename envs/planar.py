@@ -4,7 +4,7 @@ Turns MuJoCo's free-joint state rows into named planar quantities (house rule 6)
 world z, so its heading is the angle of body y from world y and omega_z is both the body- and world-frame
 component. Works on whole trajectories (vectorised over time) or single states. `BlowEnv` is the env plumbing for
 scenarios whose episode starts with a blow: the scenario's pulse (`Scenario.control`) is delivered during
-``reset``, so an episode starts just after the blow.
+``reset`` (the `ScenarioEnv._begin` hook), so an episode starts just after the blow.
 """
 
 from __future__ import annotations
@@ -97,7 +97,7 @@ def body_state(model: mujoco.MjModel, data: mujoco.MjData, body: str) -> PlanarM
 class BlowEnv(ScenarioEnv):
     """Env plumbing for one body struck at the start of the episode.
 
-    ``reset`` delivers the scenario's blow (its `Scenario.control` pulse) before returning, so the first
+    ``reset`` delivers the scenario's blow (its `Scenario.control` pulse, in `_begin`) before returning, so the first
     observation is the state just after the blow; the action is then a small extra planar force and torque on
     `body` (world frame, through ``xfrc_applied``): (f_x N, f_y N, tau_z N m), clipped to +-`max_force`.
     Zero action is the textbook problem. Observation (float64, shape (6,)):
