@@ -138,8 +138,8 @@ def lab_angle_probabilities(
     """Probability that a hit scatters the particle into each LAB-angle bin, from C6.
 
     ``P_i = (1 / (pi a^2)) integral over the bin of sigma_lab(psi) 2 pi sin(psi) dpsi`` (THEORY.md C6; total
-    cross section pi a^2, C5), by adaptive quadrature of `lab_cross_section_projectile` (or `..._target`); the
-    1/s singularity at psi_max is integrable and placed at a bin end.
+    cross section pi a^2, C5), by adaptive quadrature of `lab_cross_section_projectile` (or `..._target`) in
+    ``w = sqrt(psi_top - psi)``, which removes the integrable 1/s singularity at psi_max.
 
     Parameters
     ----------
@@ -165,11 +165,16 @@ def lab_angle_probabilities(
             return lab_cross_section_target(p, a) * 2 * np.pi * np.sin(p)
     else:
         raise ValueError(f"particle {particle!r} is not 'projectile' or 'target'")
+    def regular(w):
+        # psi = top - w^2 turns the 1/sqrt(top - psi) singularity at psi_max (x > 1) into a smooth integrand.
+        return density(top - w * w) * 2 * w
+
     out = np.zeros(len(edges) - 1)
     for i, (lo, hi) in enumerate(zip(edges[:-1], edges[1:], strict=True)):
         hi = min(hi, top)
         if hi > lo:
-            out[i] = integrate.quad(density, lo, hi, epsabs=0, epsrel=1e-11, limit=200)[0]
+            w_lo, w_hi = np.sqrt(top - hi), np.sqrt(top - lo)
+            out[i] = integrate.quad(regular, w_lo, w_hi, epsabs=0, epsrel=1e-11, limit=200)[0]
     return out / (np.pi * a * a)
 
 
@@ -193,7 +198,7 @@ def soft_sphere_turning_point(
         neg = 1.0 - (b / mid) ** 2 - kappa * (a - mid) ** 2 < 0
         lo = np.where(neg, mid, lo)
         hi = np.where(neg, hi, mid)
-    return np.where(b >= a, b, 0.5 * (lo + hi))
+    return np.where(b >= a, b, 0.5 * (lo + hi)).reshape(np.shape(impact_parameter))
 
 
 def soft_sphere_cm_angle(
@@ -234,7 +239,7 @@ def soft_sphere_cm_angle(
     b = np.atleast_1d(np.asarray(impact_parameter, dtype=float))
     hit = b < a
     bh = np.where(hit, b, 0.0)
-    rmin = soft_sphere_turning_point(bh, a, stiffness, speed)
+    rmin = soft_sphere_turning_point(bh, a, stiffness, speed).reshape(bh.shape)
     half = np.sqrt(a - rmin)  # t runs over [0, half]
     t = 0.5 * half[:, None] * (_GAUSS_T[None, :] + 1.0)
     r = rmin[:, None] + t * t

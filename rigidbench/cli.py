@@ -78,7 +78,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
     chosen = [registry.get(s) for s in args.scenarios] if args.scenarios else list(registry.scenarios().values())
     for sc in chosen:
-        print(f"{sc.slug}  ({sc.env_id})\n  {sc.title}")
+        print(f"{sc.slug}  ({sc.env_id or 'no gymnasium env'})\n  {sc.title}")
         defaults = sc.defaults()
         print("  parameters:")
         for p in sc.params:

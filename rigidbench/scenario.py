@@ -135,8 +135,8 @@ class Scenario:
     cases : tuple of Case
         The first case is the default.
     checks : tuple of Check
-    env_id : str
-        Gymnasium id, e.g. ``"rigidbench/HeavyTop-v0"``.
+    env_id : str or None
+        Gymnasium id, e.g. ``"rigidbench/HeavyTop-v0"``; None for a scenario with no stepping env.
     """
 
     slug: ClassVar[str]
@@ -144,7 +144,7 @@ class Scenario:
     params: ClassVar[tuple[Param, ...]]
     cases: ClassVar[tuple[Case, ...]]
     checks: ClassVar[tuple[Check, ...]]
-    env_id: ClassVar[str]
+    env_id: ClassVar[str | None]
 
     # ---- hooks -------------------------------------------------------------------------------------------
 
