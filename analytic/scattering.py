@@ -165,6 +165,7 @@ def lab_angle_probabilities(
             return lab_cross_section_target(p, a) * 2 * np.pi * np.sin(p)
     else:
         raise ValueError(f"particle {particle!r} is not 'projectile' or 'target'")
+
     def regular(w):
         # psi = top - w^2 turns the 1/sqrt(top - psi) singularity at psi_max (x > 1) into a smooth integrand.
         return density(top - w * w) * 2 * w
