@@ -90,7 +90,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
             print(f"    {c.name:<18} {c.doc}")
         print("  checks:")
         for ch in sc.checks:
-            print(f"    {ch.name:<24} tol {ch.tolerance:.0e} {ch.kind:<3}  [{ch.theory}]")
+            print(f"    {ch.name:<24} tol {ch.tolerance:.3g} {ch.kind:<3}  [{ch.theory}]")
         print()
     return EXIT_OK
 

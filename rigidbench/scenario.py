@@ -61,7 +61,9 @@ class Check:
     unit : str
         Unit of `measured` and `expected`.
     tolerance : float
-        Largest accepted error, in the unit for ``kind="abs"``, a fraction for ``kind="rel"``.
+        Largest accepted error, in the unit for ``kind="abs"``, a fraction for ``kind="rel"``. A bound that
+        depends on the run (n^-1/2, k^-1/2) is given at the model's defaults here and replaced by the run's
+        prediction (``prediction["_tolerance"][name]``, see `Scenario._scaled_check`).
     kind : {"rel", "abs"}
         Relative error ``|m - e| / |e|`` or absolute error ``|m - e|``.
     reason : str
