@@ -159,3 +159,14 @@ def test_thorough_cross_section_passes_with_1e5_collisions():
     run = registry.get("cross-section").run("heavy-projectile", settings=profile("thorough"))
     assert run.params["n"] >= 1e5
     assert run.outcomes and not _failures(run)
+
+
+def test_elastic_contact_from_a_target_penetration_and_its_refusal():
+    from rigidbench.contact import elastic_contact
+
+    contact = elastic_contact(timestep=5e-7, penetration=1e-4, approach_speed=1.0)
+    assert contact.stiffness == pytest.approx(1e8)
+    assert contact.steps(5e-7) == pytest.approx(np.pi / (1e4 * 5e-7))
+    assert contact.solref == (-1e8, 0.0)
+    with pytest.raises(ValueError, match="too high for timestep"):
+        elastic_contact(timestep=5e-7, stiffness=1e14)
