@@ -366,7 +366,8 @@ class HardSpheres(Scenario):
         spring = self._spring(model)
         if spring.direct and spring.elastic and b > 0:
             softer = copy.copy(model)
-            softer.geom_solref[:, 0] = model.geom_solref[:, 0] / SOFTER
+            for name in ("projectile", "target"):
+                softer.geom(name).solref[0] = model.geom(name).solref[0] / SOFTER
             runs["softer"] = (softer, b)
         if m1 > m2:
             runs["b0"] = (model, scattering.critical_impact_parameter(a, m1 / m2))
