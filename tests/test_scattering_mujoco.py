@@ -170,3 +170,18 @@ def test_elastic_contact_from_a_target_penetration_and_its_refusal():
     assert contact.solref == (-1e8, 0.0)
     with pytest.raises(ValueError, match="too high for timestep"):
         elastic_contact(timestep=5e-7, stiffness=1e14)
+
+
+@pytest.mark.slow
+def test_soft_shift_of_the_simulation_scales_as_k_to_minus_half_over_three_decades():
+    """Sweep: theta_hard - theta_sim against k from 1e6 to 1e9 (equal masses, b = a/2): the fitted exponent is
+    -1/2, and each shift matches the soft prediction (C8) far better than the hard one (C5)."""
+    ks = np.array([1e6, 1e7, 1e8, 1e9])
+    shifts = []
+    for k in ks:
+        run = HARD.run("equal-mass", {"stiffness": k})
+        by = {o.check.name: o for o in run.outcomes}
+        assert by["cm-angle"].passed
+        shifts.append(by["cm-angle-hard"].expected - by["cm-angle-hard"].measured)
+    slope = np.polyfit(np.log(ks), np.log(shifts), 1)[0]
+    assert slope == pytest.approx(-0.5, abs=0.01)
