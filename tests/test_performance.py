@@ -41,6 +41,7 @@ def test_simulate_writes_rollout_states_in_place_equal_to_a_plain_rollout():
     data = scenario.start(model)
     state0 = get_state(model, data)
     traj = simulate(model, data, 0.05)
+    np.testing.assert_array_equal(get_state(model, data), state0)  # `data` stays at the initial state
     states, _ = rollout.rollout(model, data, state0[None], nstep=len(traj.time) - 1)
     expected = np.concatenate([state0[None], states[0]])
     np.testing.assert_array_equal(traj.time, expected[:, 0])
