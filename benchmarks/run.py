@@ -30,6 +30,7 @@ if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
     os.environ["MUJOCO_GL"] = "egl"
 
 import argparse
+import inspect
 import json
 import pathlib
 import platform
@@ -50,7 +51,7 @@ from mujoco import rollout
 import rigidbench
 from rigidbench import registry
 from rigidbench.settings import PROFILES
-from rigidbench.simulate import STATE, get_state
+from rigidbench.simulate import STATE, final_states, get_state
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 PEER_ENV = "InvertedPendulum-v5"
@@ -312,10 +313,76 @@ def bench_runner(quick: bool) -> tuple[list[dict[str, Any]], dict[str, Any]]:
 # ---- 3. cross-section ----------------------------------------------------------------------------------------
 
 
+def _raw_beam(model: mujoco.MjModel, states0: np.ndarray, nstep: int, nthread: int, chunk: int) -> Lap:
+    """The beam as bare `mujoco.rollout` calls: same states, steps, threads and chunks, one thread pool."""
+    datas = [mujoco.MjData(model) for _ in range(nthread)]
+    out = np.empty((min(chunk, len(states0)), nstep, states0.shape[1]))
+    t0 = now()
+    with rollout.Rollout(nthread=nthread if nthread > 1 else 0) as pool:
+        for lo in range(0, len(states0), chunk):
+            part = states0[lo : lo + chunk]
+            pool.rollout(model, datas, part, nstep=nstep, state=out[: len(part)])
+    return now() - t0
+
+
 def bench_cross_section(quick: bool) -> list[dict[str, Any]]:
+    """Collisions per second of the cross-section case, whole (`Scenario.run`: beam, rollout, histograms)
+    against bare rollouts of the same states; 1 and 2 threads."""
     if "cross-section" not in registry.scenarios():
         return [row("cross-section", "collisions/s (cross-section scenario not on this branch)", float("nan"), "1/s")]
-    raise NotImplementedError  # filled in when the cross-section scenario lands
+    n, repeats = (200, 1) if quick else (20_000, 3)
+    scenario = type(registry.get("cross-section"))()  # a private instance: `nthread` is set on it below
+    case, overrides = "heavy-projectile", {"n": n}
+    model = scenario.build(scenario.resolve(scenario.case(case), overrides))
+    data = scenario.start(model)
+    states0, _ = scenario.beam(model, data)
+    nstep = round(scenario.duration(scenario.predict(model, data)) / model.opt.timestep)
+    chunk = inspect.signature(final_states).parameters["chunk"].default
+
+    def whole(nthread: int) -> Callable[[], Lap]:
+        def block() -> Lap:
+            scenario.nthread = nthread
+            t0 = now()
+            scenario.run(case, overrides)
+            return now() - t0
+
+        return block
+
+    blocks = {}
+    for nthread in (1, 2):
+        blocks[f"run {nthread}"] = whole(nthread)
+        blocks[f"raw {nthread}"] = lambda nthread=nthread: _raw_beam(model, states0, nstep, nthread, chunk)
+    times = interleaved(blocks, repeats)
+    rate = {k: n / median(v) for k, v in times.items()}
+    rows = []
+    for nthread in (1, 2):
+        seconds_1e5 = 1e5 / rate[f"run {nthread}"]
+        rows.append(
+            row(
+                "cross-section",
+                f"cross-section:{case}, n={n}, {nthread} thread(s), collisions/s ({nstep} RK4 steps each)",
+                rate[f"run {nthread}"],
+                "1/s",
+                f"bare mujoco.rollout, same states, {nthread} thread(s)",
+                rate[f"raw {nthread}"],
+                paired_ratio(times[f"raw {nthread}"], times[f"run {nthread}"]),
+                "1e5 in <= 30 s" if nthread == 2 else "",
+                seconds_1e5 <= 30 if nthread == 2 else None,
+                seconds_1e5=seconds_1e5,
+            )
+        )
+    rows.append(
+        row(
+            "cross-section",
+            "  2 threads vs 1 (Scenario.run)",
+            rate["run 2"],
+            "1/s",
+            "1 thread",
+            rate["run 1"],
+            paired_ratio(times["run 1"], times["run 2"]),
+        )
+    )
+    return rows
 
 
 # ---- 4. wall time of the command line ------------------------------------------------------------------------
