@@ -135,3 +135,11 @@ def test_cli_jobs_must_be_a_positive_integer_and_do_not_change_the_rows(tmp_path
         rows = json.loads(path.read_text())["results"]
         outputs.append([{k: v for k, v in r.items() if k not in VOLATILE} for r in rows])
     assert outputs[0] == outputs[1]
+
+
+def test_one_quaternion_takes_the_float_path_with_the_bits_of_the_vectorised_one():
+    q = np.random.default_rng(2).normal(size=(20_000, 4)) * np.random.default_rng(3).uniform(0.1, 10, (20_000, 1))
+    batched = frames.quat_to_matrix(q)
+    for i in range(len(q)):
+        np.testing.assert_array_equal(frames.quat_to_matrix(q[i]), batched[i])
+    np.testing.assert_array_equal(frames.quat_to_matrix(q[:1]), batched[:1])
