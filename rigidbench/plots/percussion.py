@@ -88,11 +88,24 @@ def struck_stick(ctx: PlotContext) -> list[Figure]:
             if p > length / 2:
                 ax.plot([near[i, 0], cop[i, 0]], [near[i, 1], cop[i, 1]], color="0.7", lw=0.8, ls=":", zorder=1)
         k = _thin(len(t), 120)
-        ax.plot(cop[k, 0], cop[k, 1], color="C3", label=f"MuJoCo: body point s = -p ({_settings_text(run)})",
-                **{**SIM, "ms": 2.5})  # fmt: skip
+        ax.plot(
+            cop[k, 0],
+            cop[k, 1],
+            color="C3",
+            label=f"MuJoCo: body point s = -p ({_settings_text(run)})",
+            **{**SIM, "ms": 2.5},
+        )
         n = np.arange(0, int(tp[-1] / theory.cusp_period) + 1)
-        ax.plot(n * theory.cusp_spacing, np.full(n.shape, -p), "^", color="k", mfc="none", ms=10, mew=1.2,
-                label="theory cusps, 2 pi p apart")  # fmt: skip
+        ax.plot(
+            n * theory.cusp_spacing,
+            np.full(n.shape, -p),
+            "^",
+            color="k",
+            mfc="none",
+            ms=10,
+            mew=1.2,
+            label="theory cusps, 2 pi p apart",
+        )
         after = t > tau
         vel = m.point_velocity_W(np.array([0.0, -p, 0.0]))[after]
         acc = m.point_acceleration_W(np.array([0.0, -p, 0.0]))[after]
@@ -289,8 +302,15 @@ def cushion_rebound(ctx: PlotContext) -> list[Figure]:
     ax.text(0.7, rebound_slip(0.1 * radius), " H = 7/10 of the diameter", fontsize=8)
     ax.axhline(0.0, color="0.6", lw=0.6)
     for i, (case, run) in enumerate(runs):
-        ax.plot(run.params["cushion_height"] / (2 * radius), _measured(run, "rebound-slip"), "o", color=f"C{i}",
-                ms=8, mec="k", label=f"MuJoCo: {case}")  # fmt: skip
+        ax.plot(
+            run.params["cushion_height"] / (2 * radius),
+            _measured(run, "rebound-slip"),
+            "o",
+            color=f"C{i}",
+            ms=8,
+            mec="k",
+            label=f"MuJoCo: {case}",
+        )
     extra = []
     for frac in (0.15, 0.3, 0.45, 0.55, 0.65, 0.75, 0.9):
         run = _try_run(ctx, "low", {"cushion_height": 2 * frac * radius})
@@ -347,8 +367,12 @@ def pivoted_stick(ctx: PlotContext) -> list[Figure]:
             points.append((None, run))
     fig, (ax, res) = ctx.subplots(2, 1, sharex=True, height_ratios=(3, 1.2), figsize=(8.0, 5.6))
     d = np.linspace(0.0, length, 200)
-    ax.plot(d / length, percussion.pivot_reaction_impulse(mass, inertia_pivot, d_cm, d, 1.0),
-            label="theory (P4): J / Pi = M d_cm d / I_O - 1", **THEORY)  # fmt: skip
+    ax.plot(
+        d / length,
+        percussion.pivot_reaction_impulse(mass, inertia_pivot, d_cm, d, 1.0),
+        label="theory (P4): J / Pi = M d_cm d / I_O - 1",
+        **THEORY,
+    )
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.axvline(sweet / length, color="0.5", ls=":", lw=0.8)
     ax.text(sweet / length, -0.9, f" sweet spot d* = I_O/(M d_cm) = {sweet / length:.4g} L", fontsize=8)
@@ -412,9 +436,13 @@ def ball_stick(ctx: PlotContext) -> list[Figure]:
     quantities = (
         ("ball u'/u", lambda th: th.ball_velocity / u, "ball-velocity", lambda v: v / u),
         ("stick V/u", lambda th: th.stick.com_velocity / u, "stick-velocity", lambda v: v / u),
-        ("stick -omega h/u", lambda th: -th.stick.angular_velocity * offset / u, "stick-angular-velocity",
-         lambda v: -v * offset / u),
-    )  # fmt: skip
+        (
+            "stick -omega h/u",
+            lambda th: -th.stick.angular_velocity * offset / u,
+            "stick-angular-velocity",
+            lambda v: -v * offset / u,
+        ),
+    )
     fig, (ax, res) = ctx.subplots(2, 1, sharex=True, height_ratios=(3, 1.2), figsize=(8.0, 5.8))
     for i, (name, curve, check, scale) in enumerate(quantities):
         color = f"C{i}"
@@ -430,8 +458,14 @@ def ball_stick(ctx: PlotContext) -> list[Figure]:
     ax.text(1.0, -1.0, " m = M_eff: the ball stops", fontsize=8)
     for case, run in runs:
         x = run.params["ball_mass"] / m_eff
-        ax.annotate(case, (x, _measured(run, "ball-velocity") / u), xytext=(8, -12), textcoords="offset points",
-                    fontsize=7.5, color="C0")  # fmt: skip
+        ax.annotate(
+            case,
+            (x, _measured(run, "ball-velocity") / u),
+            xytext=(8, -12),
+            textcoords="offset points",
+            fontsize=7.5,
+            color="C0",
+        )
     ax.plot([], [], "o", color="0.6", mec="k", label="MuJoCo: the cases")
     ax.plot([], [], "s", color="0.6", mec="k", ms=5, label="MuJoCo: more ball masses")
     ax.set_ylim(-1.1, 1.5)
