@@ -24,6 +24,15 @@ def _ok(run) -> bool:
     return run.trajectory is not None and run.diverged_at is None
 
 
+def _try_run(ctx: PlotContext, case: str, overrides: dict | None = None):
+    """The case's run, or None if its parameters or these settings are refused (ValueError) or it diverged."""
+    try:
+        run = ctx.run(case, overrides)
+    except ValueError:
+        return None
+    return run if _ok(run) else None
+
+
 def _settings_text(run) -> str:
     s = run.settings
     return f"{s['integrator']}, dt = {s['timestep']:g} s, mujoco {s['mujoco']}"
@@ -42,8 +51,7 @@ def _thin(n: int, target: int = 400) -> slice:
 
 @plot("pendulum")
 def pendulum(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, ctx.run(c.name)) for c in ctx.scenario.cases]
-    runs = [(c, r) for c, r in runs if _ok(r)]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     figures = []
@@ -52,11 +60,7 @@ def pendulum(ctx: PlotContext) -> list[Figure]:
     t0 = osc.small_amplitude_period(length_eq, g)
     extra = []
     for amplitude in (0.5, 1.5, 2.0, 2.8):
-        try:
-            run = ctx.run("one-radian", {"amplitude": amplitude})
-        except ValueError:
-            continue
-        if _ok(run):
+        if (run := _try_run(ctx, "one-radian", {"amplitude": amplitude})) is not None:
             extra.append(run)
     a = np.linspace(1e-3, 3.1, 400)
     exact = np.array([osc.pendulum_period(length_eq, g, x) for x in a])
@@ -140,8 +144,8 @@ def pendulum(ctx: PlotContext) -> list[Figure]:
 def coupled_pendulums(ctx: PlotContext) -> list[Figure]:
     figures = []
     for case in ("beats", "weak-coupling"):
-        run = ctx.run(case)
-        if not _ok(run):
+        run = _try_run(ctx, case)
+        if run is None:
             continue
         traj, pred = run.trajectory, run.prediction
         beats: osc.Beats = pred["_beats"]
@@ -215,8 +219,7 @@ def _chain_omegas(run) -> np.ndarray:
 
 @plot("pendulum-chain")
 def pendulum_chain(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, ctx.run(c.name)) for c in ctx.scenario.cases]
-    runs = [(c, r) for c, r in runs if _ok(r)]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     figures = []
@@ -316,8 +319,7 @@ def pendulum_chain(ctx: PlotContext) -> list[Figure]:
 
 @plot("double-pendulum")
 def double_pendulum(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, ctx.run(c.name)) for c in ctx.scenario.cases]
-    runs = [(c, r) for c, r in runs if _ok(r)]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     figures = []

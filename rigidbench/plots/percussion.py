@@ -49,8 +49,8 @@ def _thin(n: int, target: int = 400) -> slice:
     return slice(None, None, max(1, n // target))
 
 
-def _try_run(ctx: PlotContext, case: str, overrides: dict):
-    """An extra simulation for a point on a curve; None if the parameters are refused or it diverges."""
+def _try_run(ctx: PlotContext, case: str, overrides: dict | None = None):
+    """The case's run, or None if its parameters or these settings are refused (ValueError) or it diverged."""
     try:
         run = ctx.run(case, overrides)
     except ValueError:
@@ -63,7 +63,7 @@ def _try_run(ctx: PlotContext, case: str, overrides: dict):
 
 @plot("struck-stick")
 def struck_stick(ctx: PlotContext) -> list[Figure]:
-    cases = [c for c in ("quarter", "end", "near-centre") if _ok(ctx.run(c))]
+    cases = [c for c in ("quarter", "end", "near-centre") if _try_run(ctx, c) is not None]
     if not cases:
         return []
     fig, axes = ctx.subplots(len(cases), 1, figsize=(9.0, 2.5 * len(cases) + 0.6), squeeze=False)
@@ -159,8 +159,8 @@ def _slip_panel(ctx: PlotContext, ax, res, cases, label) -> list[tuple[str, floa
     """Slip(t) of each case over B2's straight line, t_r marked; difference underneath. Returns what was drawn."""
     drawn = []
     for i, case in enumerate(cases):
-        run = ctx.run(case)
-        if not _ok(run):
+        run = _try_run(ctx, case)
+        if run is None:
             continue
         model = ctx.model(case)
         traj, theory, tau = run.trajectory, run.prediction["_theory"], run.prediction["_tau"]
@@ -202,12 +202,16 @@ def _slip_panel(ctx: PlotContext, ax, res, cases, label) -> list[tuple[str, floa
     return drawn
 
 
-def _lift_panel(ctx: PlotContext, ax, settings, title: str) -> float:
-    """Height of the ball above its resting height, over R, for each case; returns the largest."""
+def _lift_panel(ctx: PlotContext, ax, settings, title: str) -> float | None:
+    """Height of the ball above its resting height, over R, for each case; returns the largest (None: no case
+    could be simulated under `settings`)."""
     top, curves = 0.0, []
     for i, case in enumerate(c.name for c in ctx.scenario.cases):
         if settings is None:
-            run, model = ctx.run(case), ctx.model(case)
+            run = _try_run(ctx, case)
+            if run is None:
+                continue
+            model = ctx.model(case)
         else:
             try:
                 run = ctx.scenario.run(case, None, settings, keep_trajectory=True)
@@ -226,6 +230,9 @@ def _lift_panel(ctx: PlotContext, ax, settings, title: str) -> float:
     ax.axhline(0.0, color="k", lw=0.9, ls="--")
     ax.set_title(title, fontsize=9)
     ax.set_xlabel("t (s)")
+    if not curves:
+        ax.text(0.5, 0.5, "not simulated under these settings", transform=ax.transAxes, ha="center", fontsize=9)
+        return None
     ax.legend(fontsize=7.5, loc="upper right")
     return top
 
@@ -258,20 +265,28 @@ def cue_strike(ctx: PlotContext) -> list[Figure]:
                 fig,
             )
         )
+    else:
+        pyplot().close(fig)
     fig, axes = ctx.subplots(1, 2, figsize=(9.5, 3.8))
     here = _lift_panel(ctx, axes[0], None, "settings of this report")
     default = _lift_panel(ctx, axes[1], profile("mujoco-default"), "mujoco-default profile (Euler, 2 ms, soft contact)")
     axes[0].set_ylabel("(z - z_rest) / R")
     axes[0].ticklabel_format(axis="y", style="sci", scilimits=(0, 0))
+    if here is None and default is None:
+        pyplot().close(fig)
+        return figures
+    here_text = "not simulated under these settings" if here is None else f"{here:.2g} R"
+    default_text = "could not be simulated" if default is None else f"reach {default:.2g} R"
     figures.append(
         Figure(
             "Cue ball: it hops (a MuJoCo finding)",
             "Height of the ball's centre above its resting height, in radii, while it skids and rolls. THEORY.md "
             "B2 assumes it stays on the table (the black dashed zero). MuJoCo solves normal and friction rows as "
             "one soft constraint: while the ball slides, the friction demand pushes the normal force above M g and "
-            f"kicks the ball off the cloth at each touchdown, so it hops along until it rolls (largest lift here "
-            f"{here:.2g} R, within the 1e-3 R tolerance at the reference settings). With MuJoCo's default contact "
-            f"(right) the hops reach {default:.2g} R. The rolling phase (and the no-skid shot) stays on the table.",
+            f"kicks the ball off the cloth at each touchdown, so it hops along until it rolls (largest lift with "
+            f"the report's settings: {here_text}; the tolerance at the reference settings is 1e-3 R). With "
+            f"MuJoCo's default contact (right) the hops {default_text}. The rolling phase (and the no-skid shot) "
+            "stays on the table.",
             fig,
         )
     )
@@ -280,8 +295,7 @@ def cue_strike(ctx: PlotContext) -> list[Figure]:
 
 @plot("cushion-rebound")
 def cushion_rebound(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, ctx.run(c.name)) for c in ctx.scenario.cases]
-    runs = [(c, r) for c, r in runs if _ok(r)]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     model = ctx.model(runs[0][0])
@@ -350,8 +364,7 @@ def cushion_rebound(ctx: PlotContext) -> list[Figure]:
 
 @plot("pivoted-stick")
 def pivoted_stick(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, ctx.run(c.name)) for c in ctx.scenario.cases]
-    runs = [(c, r) for c, r in runs if _ok(r)]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     length = runs[0][1].params["length"]
@@ -418,8 +431,7 @@ def pivoted_stick(ctx: PlotContext) -> list[Figure]:
 
 @plot("ball-stick")
 def ball_stick(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, ctx.run(c.name)) for c in ctx.scenario.cases]
-    runs = [(c, r) for c, r in runs if _ok(r)]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     p = runs[0][1].params
@@ -499,7 +511,7 @@ def ball_stick(ctx: PlotContext) -> list[Figure]:
 
 @plot("marble-shot")
 def marble_shot(ctx: PlotContext) -> list[Figure]:
-    cases = [c.name for c in ctx.scenario.cases if _ok(ctx.run(c.name))]
+    cases = [c.name for c in ctx.scenario.cases if _try_run(ctx, c.name) is not None]
     if not cases:
         return []
     fig, axes = ctx.subplots(1, len(cases), figsize=(5.0 * len(cases), 4.2), squeeze=False, sharey=True)
