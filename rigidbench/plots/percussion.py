@@ -402,7 +402,8 @@ def pivoted_stick(ctx: PlotContext) -> list[Figure]:
     res.axhspan(-tol, tol, color="C2", alpha=0.15, label=f"tolerance +-{tol:g}")
     diffs = [abs(_measured(r, "reaction-impulse") - _expected(r, "reaction-impulse")) for _c, r in points]
     biggest = max((d for d in diffs if np.isfinite(d)), default=tol)
-    res.set_ylim(-1.5 * min(max(biggest, 0.05 * tol), 2 * tol), 1.5 * min(max(biggest, 0.05 * tol), 2 * tol))
+    span = 1.5 * max(biggest, 0.05 * tol)  # the differences all visible, the band where it fits
+    res.set_ylim(-span, span)
     res.axhline(0.0, color="k", lw=0.6)
     res.set_ylabel("sim - theory (Pi)")
     res.ticklabel_format(axis="y", style="sci", scilimits=(0, 0))
@@ -467,7 +468,7 @@ def ball_stick(ctx: PlotContext) -> list[Figure]:
             res.semilogx(x, y - scale(_expected(run, check)), marker, color=color, ms=5 if case else 4, mec="k")
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.axvline(1.0, color="0.5", ls=":", lw=0.8)
-    ax.text(1.0, -1.0, " m = M_eff: the ball stops", fontsize=8)
+    ax.text(1.0, 0.03, " m = M_eff: the ball stops", fontsize=8, transform=ax.get_xaxis_transform())
     for case, run in runs:
         x = run.params["ball_mass"] / m_eff
         ax.annotate(
@@ -480,7 +481,7 @@ def ball_stick(ctx: PlotContext) -> list[Figure]:
         )
     ax.plot([], [], "o", color="0.6", mec="k", label="MuJoCo: the cases")
     ax.plot([], [], "s", color="0.6", mec="k", ms=5, label="MuJoCo: more ball masses")
-    ax.set_ylim(-1.1, 1.5)
+    ax.margins(y=0.12)
     ax.set_ylabel("velocity after the impact / u")
     ax.set_title(
         f"ball-stick: elastic impact at h = {offset:g} m on a {mass:g} kg, {length:g} m stick, M_eff = {m_eff:.4g} kg",
