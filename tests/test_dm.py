@@ -16,8 +16,15 @@ def test_every_env_has_a_dm_env_view_with_consistent_specs(env_id):
     action = np.zeros(env.action_spec().shape)
     env.action_spec().validate(action)
     step = env.step(action)
-    assert step.step_type == StepType.MID and step.discount == 1.0
-    assert step.reward == pytest.approx(-env.last_info["deviation"])
+    info = env.last_info
+    if "deviation" in info:  # a validation env: MID step, reward = -deviation from theory
+        assert step.step_type == StepType.MID and step.discount == 1.0
+        assert step.reward == pytest.approx(-info["deviation"])
+    else:  # a task: the gymnasium reward, its terms and regret in last_info; a one-shot task ends at once
+        assert (step.step_type, step.discount) in ((StepType.MID, 1.0), (StepType.LAST, 0.0))
+        terms = [k for k in info if k.startswith("reward_")]
+        assert terms and step.reward == pytest.approx(sum(info[k] for k in terms), rel=1e-12)
+        assert np.isfinite(info["regret"])
     env.reward_spec().validate(np.float64(step.reward))
 
 
