@@ -15,8 +15,14 @@ import numpy as np
 
 from rigidbench import signals
 from rigidbench.analytic import tops
-from rigidbench.envs.rotor import FreeRotorEnv, free_body_motion, set_free_body_rotation
-from rigidbench.params import BodyInertia, Numeric, Param, Range, positive
+from rigidbench.envs.rotor import (
+    OMEGA_PARAM,
+    FreeRotorEnv,
+    free_body_motion,
+    require_rigid_body_inertia,
+    set_free_body_rotation,
+)
+from rigidbench.params import BodyInertia, Param, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
 
@@ -92,14 +98,7 @@ class FreeAsymmetricTop(Scenario):
         Param(
             "I3", "kg m^2", "largest principal moment about the CM (body z)", positive(1e3), BodyInertia("top", (2,))
         ),
-        Param(
-            "omega",
-            "rad/s",
-            "initial angular velocity in body principal axes (omega1, omega2, omega3)",
-            Range(-100, 100),
-            Numeric("omega"),
-            size=3,
-        ),
+        OMEGA_PARAM,
     )
     cases = (
         Case(
@@ -130,11 +129,7 @@ class FreeAsymmetricTop(Scenario):
                 f"parameters I1 = {i1:g}, I2 = {i2:g}, I3 = {i3:g} kg m^2 must satisfy I1 < I2 < I3 "
                 "(use free-symmetric-top for two equal moments)"
             )
-        if i1 + i2 < i3:
-            raise ValueError(
-                f"parameters I1 = {i1:g}, I2 = {i2:g}, I3 = {i3:g} kg m^2 violate the triangle inequality "
-                "I1 + I2 >= I3: no rigid body has these moments (MuJoCo refuses them too)"
-            )
+        require_rigid_body_inertia(i1, i2, i3)
         w = np.asarray(params["omega"])
         inertia = np.array([i1, i2, i3])
         two_e, l2 = np.sum(inertia * w**2), np.sum((inertia * w) ** 2)
@@ -172,15 +167,11 @@ class FreeAsymmetricTop(Scenario):
         every = signals.crossings(m.time, w2)
         return {
             "omega-body": float(np.abs(m.omega_B - top.omega_body(m.time)).max() / np.linalg.norm(m.omega_B[0])),
-            "period": _mean_spacing(up),
-            "flip-time": _mean_spacing(every),
+            "period": signals.mean_spacing(up),
+            "flip-time": signals.mean_spacing(every),
             "energy-drift": signals.max_relative_drift(m.kinetic_energy),
             "momentum-drift": signals.max_relative_drift(m.L_W),
         }
-
-
-def _mean_spacing(times: np.ndarray) -> float:
-    return float((times[-1] - times[0]) / (len(times) - 1)) if len(times) >= 2 else float("nan")
 
 
 class FreeAsymmetricTopEnv(FreeRotorEnv):

@@ -14,8 +14,14 @@ import numpy as np
 
 from rigidbench import frames, signals
 from rigidbench.analytic import tops
-from rigidbench.envs.rotor import FreeRotorEnv, free_body_motion, set_free_body_rotation
-from rigidbench.params import BodyInertia, Numeric, Param, Range, positive
+from rigidbench.envs.rotor import (
+    OMEGA_PARAM,
+    FreeRotorEnv,
+    free_body_motion,
+    require_rigid_body_inertia,
+    set_free_body_rotation,
+)
+from rigidbench.params import BodyInertia, Param, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
 
@@ -122,14 +128,7 @@ class FreeSymmetricTop(Scenario):
             positive(1e3),
             BodyInertia("top", (2,)),
         ),
-        Param(
-            "omega",
-            "rad/s",
-            "initial angular velocity in body principal axes (omega1, omega2, omega3)",
-            Range(-100, 100),
-            Numeric("omega"),
-            size=3,
-        ),
+        OMEGA_PARAM,
     )
     cases = (
         Case(
@@ -149,11 +148,7 @@ class FreeSymmetricTop(Scenario):
 
     def validate(self, params: Mapping[str, Any]) -> None:
         i1, i3 = params["I1"], params["I3"]
-        if i3 > 2 * i1:
-            raise ValueError(
-                f"parameters I1 = {i1:g}, I3 = {i3:g} kg m^2 violate the triangle inequality I1 + I2 >= I3 "
-                "(I2 = I1): no rigid body has these moments"
-            )
+        require_rigid_body_inertia(i1, i1, i3, "I1 = I2, I3")
         if abs(i3 - i1) <= 1e-9 * i1:
             raise ValueError(f"parameters I1 = I3 = {i1:g} kg m^2: a spherical top has no precession to measure")
         w1, w2, w3 = params["omega"]

@@ -19,7 +19,7 @@ import numpy as np
 
 from rigidbench import frames, signals
 from rigidbench.analytic import tops
-from rigidbench.envs.rotor import RotorEnv, RotorMotion
+from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia
 from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Gravity, Numeric, Param, Range, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
@@ -220,12 +220,7 @@ class HeavyTop(Scenario):
     checks = CHECKS
 
     def validate(self, params: Mapping[str, Any]) -> None:
-        i1, i3 = params["I1"], params["I3"]
-        if i3 > 2 * i1:
-            raise ValueError(
-                f"parameters I1 = {i1:g}, I3 = {i3:g} kg m^2 violate the triangle inequality I1 + I2 >= I3 "
-                "(I2 = I1, about the CM): no rigid body has these moments"
-            )
+        require_rigid_body_inertia(params["I1"], params["I1"], params["I3"], "I1 = I2, I3 (about the CM)")
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         theta = params["tilt"]
@@ -301,7 +296,7 @@ class HeavyTop(Scenario):
             "theta-min": _worst(
                 np.concatenate([theta_min, [theta[0]] if traj.qvel[0, 0] == 0 else []]), prediction["theta-min"]
             ),
-            "nutation-period": _mean_spacing(t_max),
+            "nutation-period": signals.mean_spacing(t_max),
             "mean-precession": float(np.diff(signals.interpolate(t, phi, t_max[[0, -1]]))[0] / (t_max[-1] - t_max[0]))
             if len(t_max) >= 2
             else float("nan"),
@@ -345,10 +340,6 @@ def _worst(values: np.ndarray, expected: float) -> float:
     """The measured value farthest from the prediction (NaN if there is none)."""
     values = np.asarray(values, dtype=float)
     return float(values[np.argmax(np.abs(values - expected))]) if values.size else float("nan")
-
-
-def _mean_spacing(times: np.ndarray) -> float:
-    return float((times[-1] - times[0]) / (len(times) - 1)) if len(times) >= 2 else float("nan")
 
 
 class HeavyTopEnv(RotorEnv):

@@ -16,6 +16,32 @@ import numpy as np
 
 from rigidbench import frames
 from rigidbench.envs.base import ScenarioEnv
+from rigidbench.params import Numeric, Param, Range
+
+OMEGA_PARAM = Param(
+    "omega",
+    "rad/s",
+    "initial angular velocity in body principal axes (omega1, omega2, omega3)",
+    Range(-100, 100),
+    Numeric("omega"),
+    size=3,
+)
+
+
+def require_rigid_body_inertia(i1: float, i2: float, i3: float, names: str = "I1, I2, I3") -> None:
+    """Refuse principal moments that no rigid body has: each must be at most the sum of the other two.
+
+    Raises
+    ------
+    ValueError
+        Naming the parameters and their values (MuJoCo would refuse the model too).
+    """
+    a, b, c = sorted((i1, i2, i3))
+    if a + b < c:
+        raise ValueError(
+            f"parameters {names} = {i1:g}, {i2:g}, {i3:g} kg m^2 violate the triangle inequality "
+            "(each principal moment <= the sum of the other two): no rigid body has these moments"
+        )
 
 
 @dataclass(frozen=True)

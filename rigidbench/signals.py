@@ -88,3 +88,8 @@ def max_relative_drift(values: np.ndarray, scale: float | None = None) -> float:
     scale = float(np.linalg.norm(ref)) if scale is None else scale
     dev = np.linalg.norm(np.atleast_2d((values - ref).T).T.reshape(len(values), -1), axis=1)
     return float(dev.max() / scale)
+
+
+def mean_spacing(times: np.ndarray) -> float:
+    """Mean interval between successive event times (NaN with fewer than two events)."""
+    return float((times[-1] - times[0]) / (len(times) - 1)) if len(times) >= 2 else float("nan")
