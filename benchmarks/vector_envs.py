@@ -1,11 +1,11 @@
-"""Vector envs: gymnasium's sync vector env against the best a batched (`mujoco.rollout`) one could do.
+"""Vector envs: gymnasium's sync vector env against rigidbench's batched one (`rigidbench.envs.batched`).
 
-A batched vector env would step the N copies' physics in one threaded `mujoco.rollout` call (the torque actions
-as ``control_spec = mjSTATE_XFRC_APPLIED | mjSTATE_CTRL``) and still run each copy's Python for the
-observation and reward. The physics-only rollout below is therefore an upper bound on its throughput: when it
-is not faster than the sync vector env (which does everything), a batched implementation cannot pay.
+The batched vector env steps the N copies' physics in one threaded `mujoco.rollout` call (the torque actions as
+``control_spec = mjSTATE_XFRC_APPLIED | mjSTATE_CTRL``) and still runs each copy's Python for the observation
+and reward. The physics-only rollout is an upper bound on its throughput. The rounds alternate between the
+implementations and the median is reported, since a shared machine's load changes from second to second.
 
-Usage: ``python benchmarks/vector_envs.py [--seconds 2] [--nthread 2]``
+Usage: ``python benchmarks/vector_envs.py [--seconds 1] [--rounds 3] [--nthread 2]``
 """
 
 from __future__ import annotations
@@ -22,9 +22,10 @@ from mujoco import rollout
 import rigidbench  # noqa: F401  (registers the envs)
 
 
-def sync_rate(env_id: str, n: int, seconds: float) -> float:
-    """Env-steps per second of ``gym.make_vec(env_id, num_envs=n)`` (sync), zero actions."""
-    envs = gym.make_vec(env_id, num_envs=n)
+def vector_rate(env_id: str, n: int, seconds: float, mode: str | None, nthread: int | None = None) -> float:
+    """Env-steps per second of ``gym.make_vec(env_id, num_envs=n, vectorization_mode=mode)``, zero actions."""
+    kwargs = {} if nthread is None else {"nthread": nthread}
+    envs = gym.make_vec(env_id, num_envs=n, vectorization_mode=mode, **kwargs)
     envs.reset(seed=0)
     actions = np.zeros(envs.action_space.shape)
     count, start = 0, time.perf_counter()
@@ -60,16 +61,22 @@ def rollout_rate(env_id: str, n: int, seconds: float, nthread: int) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=2.0)
+    parser.add_argument("--seconds", type=float, default=1.0)
+    parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--nthread", type=int, default=os.cpu_count())
     args = parser.parse_args()
-    print(f"mujoco {mujoco.__version__}, {os.cpu_count()} CPUs, rollout nthread = {args.nthread}")
-    print(f"{'env':36s} {'N':>4s} {'sync (steps/s)':>15s} {'rollout physics only':>21s}")
+    load = os.getloadavg()[0]
+    print(f"mujoco {mujoco.__version__}, {os.cpu_count()} CPUs (load {load:.1f}), rollout nthread = {args.nthread}")
+    print(f"{'env (env-steps/s, median)':36s} {'N':>4s} {'sync':>8s} {'batched':>8s} {'physics only':>13s}")
     for env_id in ("rigidbench/HeavyTop-v0", "rigidbench/FreeSymmetricTop-v0", "rigidbench/TopPrecession-v0"):
         for n in (8, 32):
-            sync = sync_rate(env_id, n, args.seconds)
-            batched = rollout_rate(env_id, n, args.seconds, args.nthread)
-            print(f"{env_id:36s} {n:4d} {sync:15.0f} {batched:21.0f}")
+            rates = {"sync": [], "batched": [], "physics": []}
+            for _ in range(args.rounds):
+                rates["sync"].append(vector_rate(env_id, n, args.seconds, "sync"))
+                rates["batched"].append(vector_rate(env_id, n, args.seconds, None, args.nthread))
+                rates["physics"].append(rollout_rate(env_id, n, args.seconds, args.nthread))
+            sync, batched, physics = (float(np.median(rates[k])) for k in ("sync", "batched", "physics"))
+            print(f"{env_id:36s} {n:4d} {sync:8.0f} {batched:8.0f} {physics:13.0f}")
 
 
 if __name__ == "__main__":

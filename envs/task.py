@@ -128,7 +128,10 @@ class TaskEnv(ScenarioEnv):
     def step(self, action):
         action = self._checked_action(action)
         reference = self._reference_reward() if self._with_regret else math.nan
-        terms, outcome = self._advance(action)
+        return self._finish(reference, *self._advance(action))
+
+    def _finish(self, reference: float, terms: dict[str, float], outcome: dict[str, Any]):
+        """The step's (obs, reward, terminated, truncated, info) from its reward terms and outcome."""
         diverged = bool(outcome.get("diverged", False))
         if diverged:
             terms = self._diverged_terms()
@@ -193,9 +196,27 @@ class ClosedLoopTask(TaskEnv):
         self._nsteps = max(1, round(self._task_duration / self._env_dt))
         self._scratch = mujoco.MjData(self.model)
 
+    def step(self, action):
+        self._before_physics(action)
+        mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
+        return self._after_physics()
+
+    # Split around the physics as `ScenarioEnv.step` is (`rigidbench.envs.batched`); same arithmetic as `_advance`.
+    def _before_physics(self, action) -> None:
+        action = self._checked_action(action)
+        self._pending = (action, self._reference_reward() if self._with_regret else math.nan)
+        self._apply_action(action)
+
+    def _after_physics(self):
+        action, reference = self._pending
+        return self._finish(reference, *self._outcome(action))
+
     def _advance(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
         self._apply_action(action)
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
+        return self._outcome(action)
+
+    def _outcome(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
         self._k += 1
         if self._diverged(self._observation()):
             return {}, {"diverged": True}
