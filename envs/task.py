@@ -30,6 +30,7 @@ import mujoco
 import numpy as np
 
 from rigidbench.envs.base import ScenarioEnv
+from rigidbench.simulate import simulate, steps_for
 
 
 class TaskEnv(ScenarioEnv):
@@ -79,7 +80,7 @@ class TaskEnv(ScenarioEnv):
         """Derived targets (e.g. a precession rate from a tilt); by default the target as given."""
         return target
 
-    def _begin(self) -> None:
+    def _start_episode(self) -> None:
         """Put `self.data` at the episode's initial state for `self.target` (the model is loaded)."""
 
     def theory_action(self) -> np.ndarray:
@@ -114,13 +115,14 @@ class TaskEnv(ScenarioEnv):
         unknown = set(options) - {"params", "target"}
         if unknown:
             raise ValueError(f"unknown reset option(s) {sorted(unknown)}; valid: 'params', 'target'")
-        self._load(self._case_name, {**self._params, **dict(options.get("params") or {})})
+        self._episode_params = {**self._params, **dict(options.get("params") or {})}
+        self._load(self._case_name, self._episode_params)
         ranges = self._target_ranges()
         if "target" in options:
             self.target = self._complete_target(self._checked_target(options["target"], ranges))
         else:
             self.target = self._complete_target({n: float(self.np_random.uniform(*ranges[n])) for n in ranges})
-        self._begin()
+        self._start_episode()
         self._reference = self._reference_rewards() if self._with_regret else None
         info = {"target": dict(self.target), "params": dict(self._actual), "settings": dict(self._settings_record)}
         return self._observation(), info
@@ -155,7 +157,7 @@ class TaskEnv(ScenarioEnv):
         return np.empty((len(t), 0))  # a task compares outcomes with its target, not a trajectory with theory
 
     def _reference_rewards(self) -> np.ndarray | None:
-        """Computed once per episode at reset (after `_begin`); None if `_reference_reward` needs none."""
+        """Computed once per episode at reset (after `_start_episode`); None if `_reference_reward` needs none."""
         return None
 
     def _checked_target(self, target: Mapping[str, Any], ranges: Mapping[str, tuple[float, float]]) -> dict:
@@ -244,3 +246,63 @@ class ClosedLoopTask(TaskEnv):
             self.data = own
             self._k = 0
         return rewards
+
+
+class ShotTask(TaskEnv):
+    """A task of one action per episode (where and how hard to strike): the step simulates the whole event.
+
+    Regret: the reward the closed form predicts for the theory action (`_theory_reward`, computed from the
+    scenario's predictions, no simulation) minus the simulated reward of the action taken. A policy's regret
+    therefore measures it against the textbook; the theory action's own regret is how far MuJoCo's physics
+    (soft contact, finite pulse, integration) is from the textbook's, and each task's test bounds it with the
+    scenario's tolerances.
+
+    Subclasses implement `_shot` (simulate the action from the episode's initial state; return the reward
+    terms and the outcome) and `_theory_reward`; the observation is the target (`target_names`, in order).
+    """
+
+    def _observation_space(self) -> gym.spaces.Box:
+        return gym.spaces.Box(-np.inf, np.inf, shape=(len(self.target_names),), dtype=np.float64)
+
+    def _observation(self) -> np.ndarray:
+        return np.array([self.target.get(name, 0.0) for name in self.target_names])
+
+    def _shot(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
+        raise NotImplementedError
+
+    def _theory_reward(self) -> float:
+        raise NotImplementedError
+
+    def _advance(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
+        return self._shot(action)
+
+    def _reference_reward(self) -> float:
+        return self._theory_reward()
+
+    def _episode_end(self) -> tuple[bool, bool]:
+        return True, False
+
+    def _run_scenario(self, overrides: Mapping[str, Any], measure=None) -> dict[str, float] | None:
+        """Simulate the scenario with `overrides` on the episode's parameters, exactly as its validation run does
+        (`Scenario.run`: compile, initial state, predict, duration, open-loop control, `measure`), leave
+        `self.data` at the final state and `self.prediction` at the action's closed-form prediction.
+
+        `measure` (model, trajectory, prediction) -> dict replaces the scenario's `measure` where a task needs
+        only part of it. Returns the measured observables, or None if the simulation diverged.
+        """
+        self._load(self._case_name, {**self._episode_params, **overrides})
+        scenario, model = self.scenario, self.model
+        duration = float(scenario.duration(self.prediction))
+        nstep = steps_for(duration, model.opt.timestep)
+        traj = simulate(model, self.data, duration, control=scenario.control(model, model.opt.timestep, nstep))
+        self._show(traj.qpos[-1], traj.qvel[-1], float(traj.time[-1]))
+        if traj.diverged_at is not None:
+            return None
+        return (measure or scenario.measure)(model, traj, self.prediction)
+
+    def _show(self, qpos: np.ndarray, qvel: np.ndarray, time: float) -> None:
+        """Leave `self.data` at a simulated state (the end of the shot), for rendering."""
+        self.data.qpos[:] = qpos
+        self.data.qvel[:] = qvel
+        self.data.time = time
+        mujoco.mj_forward(self.model, self.data)

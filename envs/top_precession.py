@@ -132,7 +132,7 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
             raise ValueError(f"no steady precession at tilt {tilt:g} rad with these parameters: {exc}") from None
         return {"tilt": target["tilt"], "precession": float(slow)}
 
-    def _begin(self) -> None:
+    def _start_episode(self) -> None:
         start = {**self.params, "tilt": self.target["tilt"], "precession": 0.0, "nutation_rate": 0.0}
         self.scenario.initial_state(self.model, self.data, start)
         mujoco.mj_forward(self.model, self.data)
