@@ -155,6 +155,8 @@ class Param:
         Where the value lives in the model.
     size : int
         Number of components (3 for a vector such as a body-frame angular velocity).
+    integer : bool
+        Whether each component must be a whole number (a count, e.g. the number of pendulums in a chain).
     """
 
     name: str
@@ -163,6 +165,7 @@ class Param:
     valid: Range
     target: Target
     size: int = 1
+    integer: bool = False
 
     def parse(self, text: str) -> Value:
         """Parse a command-line value (``"0.3"`` or ``"0.1,5,0.1"``) and validate it.
@@ -195,10 +198,11 @@ class Param:
         for x in arr.ravel():
             if not math.isfinite(x):
                 raise ValueError(f"parameter '{self.name}' = {value!r} is not finite")
-            if x not in self.valid:
+            if x not in self.valid or (self.integer and x != round(x)):
+                kind = "integers in " if self.integer else ""
+                unit = "" if self.unit == "1" else f" {self.unit}"  # no unit printed for a pure number
                 raise ValueError(
-                    f"parameter '{self.name}' = {_fmt(value)} {self.unit} is outside the valid range "
-                    f"{self.valid} {self.unit}"
+                    f"parameter '{self.name}' = {_fmt(value)}{unit} is outside the valid range {kind}{self.valid}{unit}"
                 )
         return _unwrap(arr)
 

@@ -1,0 +1,246 @@
+"""Double pendulum, small oscillations: the MuJoCo side, and its gymnasium env.
+
+Theory: THEORY.md O6 (the quartic ``m1 l1 l2 w^4 - (m1 + m2) g (l1 + l2) w^2 + (m1 + m2) g^2 = 0``; equal masses
+and lengths ``w^2 = (g/l)(2 -+ sqrt 2)``, shapes ``th2/th1 = +-sqrt 2``; Wilcox Part II prob. 12.4) and O7 (the
+eigenproblem, eqs 12.15-12.26), implemented in `rigidbench.analytic.oscillations`. Model:
+``models/double_pendulum.xml``.
+
+Angles: the theory uses absolute angles th1, th2 of the rods from the downward vertical; MuJoCo's ``hinge2`` is
+relative to rod 1, so th1 = hinge1, th2 = hinge1 + hinge2. The predictions come from T and V of O7 built from
+the masses, lengths and bob inertias read back from the compiled model; O6's quartic is their point-bob limit
+(the tests check that identity), and the 1e-9 kg m^2 bob inertias move the frequencies by ~1e-9.
+
+Amplitude: the theory is linear. The fast mode bends the rods against each other (th2 - th1 = -2.4 th1 at equal
+masses and lengths) and its nonlinear frequency shift is -1.85 (a1/rad)^2, measured and exactly quadratic in
+a1 (1.85e-6, 4.6e-7, 1.2e-7 at 1, 0.5, 0.25 mrad), 30 times a lone pendulum's a^2/16: the default 0.25 mrad
+keeps it at 1.2e-7, below the 1e-6 tolerance.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from rigidbench.analytic import oscillations as osc
+from rigidbench.envs import pendulums
+from rigidbench.envs.pendulums import BobMass, PendulumEnv, RodLength
+from rigidbench.params import Gravity, Numeric, Param, Range, positive
+from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.simulate import Trajectory
+
+_FREQ = (
+    "RK4 at dt = 2 ms: relative frequency error (omega dt)^4/120 <~ 2e-10; normal coordinates from the O7 mode "
+    "vectors, crossings cubic-interpolated over >= 30 periods; nonlinear shift of the fast mode -1.85 a1^2 "
+    "(measured, exactly quadratic in a1; the slow mode's is ~20x smaller): 1.2e-7 at a1 = 0.25 mrad"
+)
+_SHAPE = (
+    "least-squares fit of th1, th2 at the measured frequencies over the record; nonlinear terms O(a^2) ~ 1e-6 of "
+    "the amplitude leak into the fit, 1e-5 leaves a decade"
+)
+CHECKS = (
+    Check("omega-slow", "rad/s", 1e-6, "rel", _FREQ, "O6/O7: slow root of det(V - w^2 T) = 0; (g/l)(2 - sqrt 2)"),
+    Check("omega-fast", "rad/s", 1e-6, "rel", _FREQ, "O6/O7: fast root of det(V - w^2 T) = 0; (g/l)(2 + sqrt 2)"),
+    Check("shape-slow", "1", 1e-5, "abs", _SHAPE, "O6/O7: th2/th1 in the slow mode (+sqrt 2 for equal m, l)"),
+    Check("shape-fast", "1", 1e-5, "abs", _SHAPE, "O6/O7: th2/th1 in the fast mode (-sqrt 2 for equal m, l)"),
+    Check(
+        "energy-drift",
+        "1",
+        1e-8,
+        "abs",
+        "RK4 is not symplectic: relative drift ~ T (omega dt)^6 / (72 dt) <~ 2e-9 over 80 s (fast mode, omega dt = "
+        "0.012); 1e-8 leaves a factor 5",
+        "O6: E = 1/2 sum m v^2 + I th'^2 + m g z conserved (relative to its initial value)",
+    ),
+)
+_BOTH = ("omega-slow", "omega-fast", "shape-slow", "shape-fast", "energy-drift")
+
+
+def _mode_ratio(p: Mapping[str, Any], mode: int) -> float:
+    """th2/th1 of a mode, from the requested parameters (for the initial condition only)."""
+    modes = osc.normal_modes(*osc.double_pendulum_matrices(p["mass1"], p["mass2"], p["length1"], p["length2"], p["g"]))
+    return float(modes.shape_ratios()[1, mode])
+
+
+class DoublePendulum(Scenario):
+    """A double pendulum oscillating about its lower equilibrium: its two normal modes (THEORY.md O6, O7)."""
+
+    slug = "double-pendulum"
+    title = "Double pendulum: small-oscillation normal modes"
+    env_id = "rigidbench/DoublePendulum-v0"
+    params = (
+        Param("mass1", "kg", "mass of the upper point bob", positive(1e3), BobMass(("pendulum1",))),
+        Param("mass2", "kg", "mass of the lower point bob", positive(1e3), BobMass(("pendulum2",))),
+        Param("length1", "m", "pivot to upper bob", positive(100.0), RodLength(("pendulum1",))),
+        Param("length2", "m", "upper bob to lower bob", positive(100.0), RodLength(("pendulum2",))),
+        Param("amplitude1", "rad", "release angle of rod 1 from the vertical", Range(-1.0, 1.0), Numeric("amplitude1")),
+        Param(
+            "amplitude2",
+            "rad",
+            "release angle of rod 2 from the vertical (absolute, not relative to rod 1)",
+            Range(-1.0, 1.0),
+            Numeric("amplitude2"),
+        ),
+        Param("g", "m/s^2", "gravitational acceleration (along -z)", positive(1e3), Gravity()),
+    )
+    cases = (
+        Case(
+            "slow-mode",
+            "released in the slow mode's shape (th2/th1 = +sqrt 2 for equal masses and lengths)",
+            {"amplitude2": lambda p: _mode_ratio(p, 0) * p["amplitude1"]},
+            ("omega-slow", "shape-slow", "energy-drift"),
+        ),
+        Case(
+            "fast-mode",
+            "released in the fast mode's shape (th2/th1 = -sqrt 2 for equal masses and lengths)",
+            {"amplitude2": lambda p: _mode_ratio(p, 1) * p["amplitude1"]},
+            ("omega-fast", "shape-fast", "energy-drift"),
+        ),
+        Case("released", "rod 1 displaced, rod 2 hanging: both modes", {"amplitude2": 0.0}, _BOTH),
+        Case(
+            "unequal",
+            "light short lower pendulum (m2 = 0.3 kg, l2 = 0.6 m), rod 1 displaced: the general O6 quartic",
+            {"amplitude2": 0.0, "mass2": 0.3, "length2": 0.6},
+            _BOTH,
+        ),
+    )
+    checks = CHECKS
+
+    def validate(self, params: Mapping[str, Any]) -> None:
+        if params["amplitude1"] == 0 and params["amplitude2"] == 0:
+            raise ValueError("parameters 'amplitude1' and 'amplitude2' are both 0: nothing moves (valid: not both 0)")
+
+    def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
+        data.qpos[:] = [params["amplitude1"], params["amplitude2"] - params["amplitude1"]]  # hinge2 is relative
+        data.qvel[:] = 0.0
+
+    @staticmethod
+    def modes(model: mujoco.MjModel) -> osc.NormalModes:
+        """Normal modes (absolute angles) from the compiled masses, lengths and bob inertias."""
+        p1, p2 = pendulums.pendulums(model)
+        T, V = osc.double_pendulum_matrices(
+            p1.mass, p2.mass, p1.length, p2.length, pendulums.gravity(model), p1.inertia_cm, p2.inertia_cm
+        )
+        return osc.normal_modes(T, V)
+
+    def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
+        modes = self.modes(model)
+        angles0 = absolute(data.qpos[None])[0]
+        excited = np.abs(modes.coordinates(angles0)) > 1e-6 * np.abs(modes.coordinates(angles0)).max()
+        ratios = modes.shape_ratios()[1]
+        return {
+            "_modes": modes,
+            "_excited": excited,
+            "_angles0": angles0,
+            "_scale": float(np.abs(angles0).max()),
+            "_energy_scale": float(energy(model, data.qpos[None], data.qvel[None])[0]),
+            "_duration": 30.5 * 2 * np.pi / modes.frequencies[excited].min(),
+            "omega-slow": float(modes.frequencies[0]),
+            "omega-fast": float(modes.frequencies[1]),
+            "shape-slow": float(ratios[0]),
+            "shape-fast": float(ratios[1]),
+            "energy-drift": 0.0,
+        }
+
+    def duration(self, prediction: Mapping[str, Any]) -> float:
+        return prediction["_duration"]
+
+    def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
+        t = traj.time
+        theta = absolute(traj.qpos)
+        modes: osc.NormalModes = prediction["_modes"]
+        excited = prediction["_excited"]
+        q = modes.coordinates(theta)
+        omegas = np.array([pendulums.frequency(t, q[:, r]) if excited[r] else np.nan for r in range(2)])
+        fitted = [r for r in range(2) if excited[r]]
+        z = pendulums.modal_amplitudes(t, theta, omegas[fitted])
+        shapes = {r: pendulums.mode_shape(z[:, i])[1] for i, r in enumerate(fitted)}
+        return {
+            "omega-slow": omegas[0],
+            "omega-fast": omegas[1],
+            "shape-slow": shapes.get(0, np.nan),
+            "shape-fast": shapes.get(1, np.nan),
+            "energy-drift": pendulums.energy_drift(energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]),
+        }
+
+
+def absolute(qpos: np.ndarray) -> np.ndarray:
+    """Absolute rod angles (th1, th2) from the vertical, shape (n, 2), from MuJoCo's (hinge1, hinge1-relative)."""
+    return np.stack([qpos[:, 0], qpos[:, 0] + qpos[:, 1]], axis=-1)
+
+
+def energy(model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
+    """Total energy (J) from the full nonlinear geometry, zero at the lower equilibrium.
+
+    Bob 1 at ``l1 (-sin th1, -cos th1)``, bob 2 at bob 1 + ``l2 (-sin th2, -cos th2)`` (absolute angles); each bob
+    also spins with its rod (inertia I_cm about y). 1 - cos is written 2 sin^2(th/2) (no cancellation).
+    """
+    p1, p2 = pendulums.pendulums(model)
+    g = pendulums.gravity(model)
+    th = absolute(qpos)
+    w = absolute(qvel)
+    vx1 = -p1.length * np.cos(th[:, 0]) * w[:, 0]
+    vz1 = p1.length * np.sin(th[:, 0]) * w[:, 0]
+    vx2 = vx1 - p2.length * np.cos(th[:, 1]) * w[:, 1]
+    vz2 = vz1 + p2.length * np.sin(th[:, 1]) * w[:, 1]
+    kinetic = 0.5 * (p1.mass * (vx1**2 + vz1**2) + p2.mass * (vx2**2 + vz2**2))
+    kinetic += 0.5 * (p1.inertia_cm * w[:, 0] ** 2 + p2.inertia_cm * w[:, 1] ** 2)
+    h1 = 2 * p1.length * np.sin(0.5 * th[:, 0]) ** 2
+    h2 = 2 * p2.length * np.sin(0.5 * th[:, 1]) ** 2
+    return kinetic + g * (p1.mass * h1 + p2.mass * (h1 + h2))
+
+
+class DoublePendulumEnv(PendulumEnv):
+    """``rigidbench/DoublePendulum-v0``: the double pendulum near its lower equilibrium, scored against its modes.
+
+    Description
+        Point bob 1 on a massless rod hinged at the origin, point bob 2 on a massless rod hinged at bob 1, both
+        swinging about the world y axis. With zero action and small angles the motion is the superposition of
+        the two normal modes of THEORY.md O6/O7 (equal masses and lengths: ``w^2 = (g/l)(2 -+ sqrt 2)``,
+        ``th2/th1 = +-sqrt 2``).
+
+    Observation Space
+        Box(-inf, inf, (4,)), float64:
+
+        ==== =============================================== ====== ==================
+        idx  quantity                                        unit   MuJoCo source
+        ==== =============================================== ====== ==================
+        0    angle of rod 1 from the downward vertical       rad    qpos of ``hinge1``
+        1    angle of rod 2 relative to rod 1                rad    qpos of ``hinge2``
+        2    rate of rod 1                                   rad/s  qvel of ``hinge1``
+        3    rate of rod 2 relative to rod 1                 rad/s  qvel of ``hinge2``
+        ==== =============================================== ====== ==================
+
+        The absolute angle of rod 2 is obs[0] + obs[1]. A positive angle turns a bob towards -x.
+
+    Action Space
+        Box(-0.1, 0.1, (1,)), float64: torque on rod 1 about its pivot (N m), through ``qfrc_applied``;
+        out-of-range actions are clipped. Zero action = the textbook problem.
+
+    Rewards
+        ``reward = -max_i |hinge_i - hinge_i,theory(t)| / max(|th1(0)|, |th2(0)|)``, the theory being the linear
+        normal-mode solution (O7); ``info["measured"]["angles"]`` and ``info["predicted"]["angles"]`` hold both
+        (rad, hinge coordinates).
+
+    Starting State
+        At rest with absolute rod angles (``amplitude1``, ``amplitude2``) (rad).
+
+    Episode End
+        Truncated after 30.5 periods of the slowest excited mode; terminated on divergence.
+
+    Arguments
+        ``case`` (slow-mode, fast-mode, released, unequal), ``params`` (mass1, mass2, length1, length2,
+        amplitude1, amplitude2, g), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e.
+        10 ms), ``render_mode``.
+
+    Version History
+        v0: initial version.
+    """
+
+    scenario_cls = DoublePendulum
+
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        th = self.prediction["_modes"].angles(t, self.prediction["_angles0"])
+        return np.stack([th[:, 0], th[:, 1] - th[:, 0]], axis=-1)  # hinge coordinates: hinge2 is relative
