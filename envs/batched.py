@@ -26,7 +26,7 @@ from gymnasium.vector.utils import batch_space, concatenate, create_empty_array
 from mujoco import rollout
 
 STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
-CONTROL = mujoco.mjtState.mjSTATE_XFRC_APPLIED | mujoco.mjtState.mjSTATE_CTRL
+CONTROL = mujoco.mjtState.mjSTATE_XFRC_APPLIED | mujoco.mjtState.mjSTATE_QFRC_APPLIED | mujoco.mjtState.mjSTATE_CTRL
 
 
 class BatchedVectorEnv(gym.vector.VectorEnv):

@@ -109,6 +109,9 @@ class ControlTask(base.Task):
         self._action = self._env._checked_action(np.asarray(action, dtype=float))
         self._env._apply_action(self._action)
 
+    def after_step(self, physics: Physics) -> None:
+        self._env._k += 1  # the env's step counter: its reward terms and theory policy may depend on it
+
     def get_observation(self, physics: Physics) -> collections.OrderedDict:
         self._bind(physics)
         return collections.OrderedDict(observation=self._env._observation())
@@ -119,7 +122,11 @@ class ControlTask(base.Task):
         return float(sum(terms[name] for name in self._env.reward_terms))
 
     def get_termination(self, physics: Physics) -> float | None:
-        return ScenarioTask.get_termination(self, physics)
+        """0 (terminal) on divergence; 1 (a truncation) at the episode's end, which a task may sample per episode."""
+        diverged = ScenarioTask.get_termination(self, physics)
+        if diverged is not None:
+            return diverged
+        return 1.0 if self._env._k >= self._env._nsteps else None
 
     def theory_action(self, physics: Physics) -> np.ndarray:
         """The task's theory action (baseline) at the physics' current state."""
@@ -190,5 +197,6 @@ def _load_task(env_id, task, params, profile_name, task_kwargs, environment_kwar
     dm_task = ControlTask(env, random=task_kwargs.pop("random", None))
     if task_kwargs:
         raise ValueError(f"unknown task_kwargs {sorted(task_kwargs)}; valid: params, profile, random")
-    kwargs = {"time_limit": env.episode_duration, "n_sub_steps": env.frame_skip, **dict(environment_kwargs or {})}
+    # The task ends its own episodes (get_termination): their length may be sampled per episode.
+    kwargs = {"time_limit": float("inf"), "n_sub_steps": env.frame_skip, **dict(environment_kwargs or {})}
     return control.Environment(physics, dm_task, **kwargs)

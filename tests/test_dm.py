@@ -108,22 +108,39 @@ def test_every_task_has_a_dm_env_view_reporting_regret(task_env_id):
     env.observation_spec()["observation"].validate(ts.observation["observation"])
 
 
-def test_dm_control_suite_runs_the_top_precession_task_like_gymnasium():
-    """suite.load accepts a closed-loop task id: its theory policy scores the same return as in gymnasium."""
+def test_dm_control_suite_runs_every_closed_loop_task_like_gymnasium(task_env_id):
+    """suite.load accepts a closed-loop task id: its theory policy scores the same return as in gymnasium, over
+    an episode of the same length, on the same sampled target."""
     pytest.importorskip("dm_control", reason="needs the dm extra")
     import gymnasium as gym
 
     from rigidbench import suite
+    from rigidbench.envs.task import ClosedLoopTask
 
-    env = suite.load("rigidbench/TopPrecession-v0", task_kwargs={"random": 0})
+    if not issubclass(registry.env_classes()[task_env_id], ClosedLoopTask):
+        with pytest.raises(ValueError, match="not a closed-loop control task"):
+            suite.load(task_env_id)
+        return
+    env = suite.load(task_env_id, task_kwargs={"random": 0})
     ts = env.reset()
-    tilt = float(ts.observation["observation"][8])
-    total = 0.0
+    target = dict(env.task._env.target)
+    total, steps = 0.0, 0
     while not ts.last():
         ts = env.step(env.task.theory_action(env.physics))
         total += ts.reward
-    gym_env = gym.make("rigidbench/TopPrecession-v0").unwrapped
-    gym_env.reset(options={"target": {"tilt": tilt}})
-    assert total == pytest.approx(gym_env._reference.sum(), rel=1e-12)
+        steps += 1
+    assert ts.discount == 1.0
+    gym_env = gym.make(task_env_id).unwrapped
+    gym_env.reset(options={"target": {k: target[k] for k in gym_env._target_ranges()}})
+    assert steps == len(gym_env._reference)
+    assert total == pytest.approx(gym_env._reference.sum(), rel=1e-12, abs=1e-15)
+
+
+def test_dm_control_suite_refuses_an_id_that_is_not_a_closed_loop_task():
+    pytest.importorskip("dm_control", reason="needs the dm extra")
+    from rigidbench import suite
+
     with pytest.raises(ValueError, match="not a closed-loop control task"):
         suite.load("rigidbench/HeavyTop-v0")
+    with pytest.raises(ValueError, match="takes no case"):
+        suite.load("rigidbench/TopPrecession-v0", "nutation")
