@@ -111,6 +111,13 @@ class ScenarioEnv(gym.Env):
         """Normalised deviation from theory (documented per env); the reward is its negative."""
         raise NotImplementedError
 
+    def _begin(self) -> None:
+        """Advance the fresh episode before its first observation (e.g. deliver a blow); nothing by default.
+
+        Called by ``reset`` after the initial state is set and before the theory is tabulated from
+        ``data.time`` on, so an episode may start at t > 0.
+        """
+
     # ---- gymnasium API ----------------------------------------------------------------------------------
 
     def reset(self, *, seed: int | None = None, options: Mapping[str, Any] | None = None):
@@ -211,6 +218,7 @@ class ScenarioEnv(gym.Env):
         self.episode_duration = float(self.scenario.duration(self._prediction))
         self._settings_record = read_settings(self.model)
         self._case = case
+        self._begin()
         # Theory on the env's time grid, evaluated once (vectorised) so a step costs a table lookup.
         self._env_dt = env_dt = self.model.opt.timestep * self.frame_skip
         self._time0 = float(self.data.time)

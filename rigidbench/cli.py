@@ -61,6 +61,91 @@ def _parser() -> argparse.ArgumentParser:
     )
     p_run.add_argument("--junit", metavar="PATH", help="write the results as JUnit XML")
     p_run.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+    p_sweep = sub.add_parser(
+        "sweep",
+        help="errors over integrators x timesteps (x parameters) and the observed order of convergence",
+        description="Run every check of the targets over integrators x timesteps (x swept parameter values) and "
+        "fit the observed order of convergence (rule: rigidbench.sweep.observed_order). Default grid: all four "
+        "integrators x dt_ref * 2^k, k = 0..5, dt_ref the scenario model file's timestep.",
+    )
+    p_sweep.add_argument(
+        "targets", nargs="*", metavar="TARGET", help="'scenario' or 'scenario:case' (default: every scenario)"
+    )
+    p_sweep.add_argument("--integrators", nargs="+", metavar="NAME", help=f"default: all of {', '.join(INTEGRATORS)}")
+    p_sweep.add_argument(
+        "--timesteps",
+        nargs="+",
+        type=_positive_float,
+        metavar="SECONDS",
+        help="default: dt_ref * 2^k, k = 0..5, per scenario",
+    )
+    p_sweep.add_argument(
+        "--param",
+        dest="params",
+        action="append",
+        default=[],
+        metavar="NAME=V1,V2,...",
+        help="sweep a numeric parameter over these values (SI units), e.g. stiffness=1e5,1e6,1e7; repeatable",
+    )
+    p_sweep.add_argument(
+        "--stiffness", metavar="K1,K2,...", help="shorthand for --param stiffness=K1,K2,... (contact scenarios)"
+    )
+    p_sweep.add_argument("--workers", type=int, default=2, help="worker processes (default 2; 1 = in process)")
+    p_sweep.add_argument("--errors", action="store_true", help="also print the error at every grid point")
+    p_sweep.add_argument("--json", metavar="PATH", help="write every point's rows and the fitted orders as JSON")
+    p_sweep.add_argument(
+        "--jsonl", metavar="PATH", help="journal: append each finished point's rows as JSON lines (resumable)"
+    )
+    p_sweep.add_argument(
+        "--resume", metavar="PATH", help="skip the points already journaled in PATH (same grid) and append the rest"
+    )
+    p_sweep.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+    p_report = sub.add_parser(
+        "report",
+        help="one self-contained HTML page: results table, settings, figures, convergence",
+        description="Build one self-contained HTML page (figures embedded as PNG, no external resources). Results "
+        "come from --from files (rigidbench run --json / sweep --json); with no run results among them, the "
+        "targets are simulated under the reference profile first.",
+    )
+    p_report.add_argument(
+        "targets", nargs="*", metavar="TARGET", help="scenarios to simulate when no run results are given"
+    )
+    p_report.add_argument("--out", required=True, metavar="PATH", help="the HTML file to write")
+    p_report.add_argument(
+        "--from",
+        dest="sources",
+        nargs="+",
+        default=[],
+        metavar="JSON",
+        help="results of 'rigidbench run --json' and/or 'rigidbench sweep --json'",
+    )
+    p_report.add_argument("--figures", metavar="DIR", help="also write every figure as a PNG file into DIR")
+    p_report.add_argument(
+        "--clips", action="store_true", help="also embed a short GIF of each scenario (needs OpenGL and Pillow)"
+    )
+    p_report.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+    p_render = sub.add_parser(
+        "render",
+        help="render a case headless to .gif, .mp4 (needs ffmpeg) or .png",
+        description="Simulate a case (as 'run' does) and render it offscreen (EGL, or OSMesa as a fallback) with "
+        "a camera that frames the whole motion. The clip spans the whole run in slow motion.",
+    )
+    p_render.add_argument("target", metavar="TARGET", help="'scenario' (its first case) or 'scenario:case'")
+    p_render.add_argument("--out", required=True, metavar="FILE", help="output file: .gif, .mp4 or .png")
+    p_render.add_argument("--profile", default="reference", help=f"settings profile: {', '.join(PROFILES)}")
+    p_render.add_argument(
+        "--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="override a parameter"
+    )
+    p_render.add_argument("--integrator", help=f"override the integrator: {', '.join(INTEGRATORS)}")
+    p_render.add_argument("--timestep", type=_positive_float, metavar="SECONDS", help="override the timestep (s)")
+    p_render.add_argument("--frames", type=int, default=90, help="frames over the run (default 90)")
+    p_render.add_argument("--fps", type=_positive_float, default=30.0, help="playback frames per second (default 30)")
+    p_render.add_argument("--size", default="480x360", metavar="WxH", help="pixels (default 480x360)")
+    p_render.add_argument("--at", type=float, metavar="SECONDS", help="for .png: the simulated time (default 0)")
+    p_render.add_argument("--no-trail", action="store_true", help="do not draw the centre-of-mass trail")
     return parser
 
 
@@ -82,6 +167,162 @@ def _parse_sets(items: Sequence[str]) -> dict[str, str]:
             raise UsageError(f"--set expects NAME=VALUE, got {item!r}")
         out[name.strip()] = value.strip()
     return out
+
+
+def _parse_sweeps(items: Sequence[str], stiffness: str | None) -> dict[str, list[float]]:
+    out: dict[str, list[float]] = {}
+    for item in [*items, *([f"stiffness={stiffness}"] if stiffness else [])]:
+        name, sep, values = item.partition("=")
+        if not sep or not name.strip() or not values.strip():
+            raise UsageError(f"--param expects NAME=V1,V2,..., got {item!r}")
+        try:
+            out[name.strip()] = [float(v) for v in values.split(",")]
+        except ValueError:
+            raise UsageError(f"--param {name.strip()}: cannot read {values!r} as comma-separated numbers") from None
+    return out
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from rigidbench import sweep
+
+    if args.workers < 1:
+        raise UsageError(f"--workers = {args.workers} must be >= 1")
+    try:
+        points = sweep.plan(
+            args.targets,
+            integrators=args.integrators,
+            timesteps=args.timesteps,
+            params=_parse_sweeps(args.params, args.stiffness),
+        )
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    from rigidbench import journal
+
+    finished: dict[str, list[dict]] = {}
+    path = args.resume or args.jsonl
+    invocation = {"sweep": [sweep.point_key(p) for p in points]}
+    if args.resume:
+        try:
+            record = journal.read(args.resume)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        if record.header["invocation"] != invocation:
+            raise UsageError(f"journal {args.resume!r} holds a different sweep grid; give the same targets and grid")
+        journal.rewrite(args.resume, record)
+        for row in record.rows:
+            finished.setdefault(row["job"], []).append({k: v for k, v in row.items() if k not in ("job", "job_size")})
+    elif path:
+        journal.start(path, invocation)
+
+    def on_result(point: sweep.Point, rows: list[dict]) -> None:
+        if path:
+            journal.append(path, sweep.point_key(point), rows)
+
+    t0 = time.perf_counter()
+    try:
+        result = sweep.execute(
+            points,
+            workers=args.workers,
+            progress=None if args.quiet else sweep.progress_line,
+            finished=finished,
+            on_result=on_result,
+        )
+    except Interrupted as exc:
+        print(
+            f"rigidbench: sweep interrupted by {exc.name}; finished points are in {path or '(nowhere: use --jsonl)'}",
+            file=sys.stderr,
+        )
+        return exc.status
+    if args.errors:
+        print(sweep.error_table(result))
+        print()
+    print(sweep.order_table(result.orders))
+    import mujoco
+
+    print(f"\nmujoco {mujoco.__version__}; {len(points)} points in {time.perf_counter() - t0:.1f} s")
+    if args.json:
+        sweep.write_json(args.json, result)
+    return EXIT_OK
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from rigidbench import plots, report, results, runner
+
+    try:
+        runs, sweeps = report.load(args.sources)
+        jobs = runner.plan(args.targets, {}, runner.settings_for("reference")) if not runs else []
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    try:
+        plots.pyplot()
+    except plots.MissingDependency as exc:
+        raise UsageError(str(exc)) from None
+    say = None if args.quiet else report.progress_line
+    if jobs:
+        rows: list[dict] = []
+        for i, batch in enumerate(runner.execute(jobs, runner.settings_for("reference"))):
+            if say:
+                say(f"[{i + 1}/{len(jobs)}] {jobs[i].name}")
+            rows.extend(batch)
+        runs = [results.document(rows)]
+    text = report.build(runs, sweeps, progress=say, figure_dir=args.figures, clips=args.clips)
+    report.write(args.out, text)
+    print(f"{args.out}: {len(text) / 1e6:.2f} MB, {text.count('<img ')} figures")
+    return EXIT_OK
+
+
+def _cmd_render(args: argparse.Namespace) -> int:
+    import os
+    import subprocess
+
+    from rigidbench import render, runner
+
+    try:
+        settings = runner.settings_for(args.profile, args.integrator, args.timestep)
+        width, _, height = args.size.lower().partition("x")
+        try:
+            size = (int(width), int(height))
+        except ValueError:
+            raise ValueError(f"--size expects WxH in pixels, got {args.size!r}") from None
+        scenario, cases = _target(args.target)
+        overrides = {n: scenario.param(n).parse(v) for n, v in _parse_sets(args.sets).items()}
+        if os.path.splitext(args.out)[1].lower() not in render.FORMATS:
+            raise ValueError(f"--out {args.out!r}: the extension must be one of {', '.join(render.FORMATS)}")
+        still = os.path.splitext(args.out)[1].lower() == ".png"
+        clip = render.render_clip(
+            f"{scenario.slug}:{cases[0]}",
+            overrides=overrides,
+            settings=settings,
+            frames=args.frames,
+            fps=args.fps,
+            width=size[0],
+            height=size[1],
+            at=(args.at or 0.0) if still else None,
+            trail=not args.no_trail,
+        )
+        print(render.write(clip, args.out))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    except render.RenderError as exc:
+        # EGL is what `import rigidbench` picks without a display; OSMesa is the software fallback. A backend
+        # is chosen once per process, so the retry is a fresh process.
+        if (
+            isinstance(exc, render.NoGLContext)
+            and os.environ.get("MUJOCO_GL") == "egl"
+            and not os.environ.get("RIGIDBENCH_NO_GL_FALLBACK")
+        ):
+            print(f"rigidbench: {exc}; retrying with MUJOCO_GL=osmesa", file=sys.stderr)
+            env = {**os.environ, "MUJOCO_GL": "osmesa", "PYOPENGL_PLATFORM": "osmesa", "RIGIDBENCH_NO_GL_FALLBACK": "1"}
+            return subprocess.run([sys.executable, "-m", "rigidbench", *sys.argv[1:]], env=env, check=False).returncode
+        print(f"rigidbench: error: {exc}", file=sys.stderr)
+        return EXIT_FAIL
+    return EXIT_OK
+
+
+def _target(target: str):
+    from rigidbench import registry
+
+    return registry.parse_target(target)
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
@@ -221,9 +462,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                 return _cmd_list(args)
             except ValueError as exc:
                 raise UsageError(str(exc)) from None
+        if args.command == "report":
+            return _cmd_report(args)
+        if args.command == "render":
+            return _cmd_render(args)
         handlers = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
-            return _cmd_run(args)
+            return _cmd_sweep(args) if args.command == "sweep" else _cmd_run(args)
         finally:
             for sig, handler in handlers.items():
                 signal.signal(sig, handler)

@@ -109,6 +109,112 @@ class Gravity:
         return float(-model.opt.gravity[2])
 
 
+@dataclass(frozen=True)
+class ScaledBodyMass:
+    """A body's mass (kg), with its explicit inertia scaled in proportion (the shape is kept)."""
+
+    body: str
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        body = spec.body(self.body)
+        body.inertia = np.array(body.inertia, dtype=float) * (float(value) / body.mass)
+        body.mass = float(value)
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(model.body(self.body).mass[0])
+
+
+@dataclass(frozen=True)
+class RodLength:
+    """Full length L (m) of a thin uniform rod along body y: a box geom of half-length L/2, and the body's
+    explicit inertia M L^2 / 12 about the transverse axes x and z through its centre (the body's mass as set in
+    the spec). With `from_origin`, the rod runs from the body origin (a pivot) to y = L, its centre of mass and
+    geom at y = L/2; otherwise it is centred on the origin."""
+
+    body: str
+    geom: str
+    from_origin: bool = False
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        geom = spec.geom(self.geom)
+        size = np.array(geom.size, dtype=float)
+        size[1] = float(value) / 2
+        geom.size = size
+        body = spec.body(self.body)
+        transverse = body.mass * float(value) ** 2 / 12
+        body.inertia = [transverse, body.inertia[1], transverse]
+        if self.from_origin:
+            geom.pos = [0.0, float(value) / 2, 0.0]
+            body.ipos = [0.0, float(value) / 2, 0.0]
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(2 * model.geom(self.geom).size[1])
+
+
+@dataclass(frozen=True)
+class SphereRadius:
+    """Radius R (m) of a solid sphere: the sphere geom's size, and the body's explicit inertia 2/5 M R^2."""
+
+    body: str
+    geom: str
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        spec.geom(self.geom).size = [float(value), 0.0, 0.0]
+        body = spec.body(self.body)
+        body.inertia = [0.4 * body.mass * float(value) ** 2] * 3
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(model.geom(self.geom).size[0])
+
+
+@dataclass(frozen=True)
+class GeomFriction:
+    """Sliding friction coefficient of the named geoms (MuJoCo uses the larger of a pair's two values)."""
+
+    geoms: tuple[str, ...]
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        for name in self.geoms:
+            friction = np.array(spec.geom(name).friction, dtype=float)
+            friction[0] = float(value)
+            spec.geom(name).friction = friction
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(model.geom(self.geoms[0]).friction[0])
+
+
+@dataclass(frozen=True)
+class SitePosition:
+    """One coordinate (m) of a site's position in its body's frame."""
+
+    site: str
+    axis: int
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        pos = np.array(spec.site(self.site).pos, dtype=float)
+        pos[self.axis] = float(value)
+        spec.site(self.site).pos = pos
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(model.site(self.site).pos[self.axis])
+
+
+@dataclass(frozen=True)
+class ActuatorGear:
+    """One component of an actuator's gear (e.g. the moment arm of a force-and-couple pair, m)."""
+
+    actuator: str
+    index: int
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        gear = np.array(spec.actuator(self.actuator).gear, dtype=float)
+        gear[self.index] = float(value)
+        spec.actuator(self.actuator).gear = gear
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(model.actuator(self.actuator).gear[self.index])
+
+
 def _unwrap(data: np.ndarray) -> Value:
     values = tuple(float(x) for x in np.ravel(data))
     return values[0] if len(values) == 1 else values

@@ -10,7 +10,8 @@ reference
     The model file as written: settings under which MuJoCo should reproduce the theory closely.
 mujoco-default
     What a user gets by writing the model naively: MuJoCo's default integrator (Euler), 2 ms step, default
-    solref/solimp on every geom, pyramidal friction cone. Failures here are the benchmark's findings.
+    solref/solimp on every geom and equality constraint, pyramidal friction cone. Failures here are the
+    benchmark's findings.
 """
 
 from __future__ import annotations
@@ -47,7 +48,8 @@ class Settings:
         Seconds, in (0, 0.1].
     cone : {"pyramidal", "elliptic"} or None
     solref, solimp : tuple of float or None
-        Applied to every geom and explicit contact pair (MuJoCo's contact softness).
+        Applied to every geom, explicit contact pair and equality constraint (MuJoCo's constraint softness;
+        MuJoCo's defaults are the same for all three).
     """
 
     integrator: str | None = None
@@ -77,7 +79,7 @@ class Settings:
             spec.option.timestep = self.timestep
         if self.cone is not None:
             spec.option.cone = CONES[self.cone]
-        for element in (*spec.geoms, *spec.pairs):
+        for element in (*spec.geoms, *spec.pairs, *spec.equalities):
             if self.solref is not None:
                 element.solref = list(self.solref)
             if self.solimp is not None:

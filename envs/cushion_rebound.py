@@ -1,0 +1,183 @@
+"""A rolling billiard ball rebounding from a cushion whose nose is at a given height: the slip the rebound leaves.
+The MuJoCo side, and its gymnasium env.
+
+Theory: THEORY.md B1 ([DONE] part: a horizontal impulse J at height h above the centre changes the slip by
+J (R h / I - 1/M), zero at h = I / (M R) = 2R/5, so a rolling ball rebounds from a cushion of height H = 7/10 of the
+diameter still rolling; Harter, Unit 6 Ch. 2, "the bumper height puts the contact point at the CoP"), then B2
+for the skid back to rolling. Implemented in `rigidbench.analytic.percussion`.
+Model: ``models/cushion_rebound.xml``: the cue-strike ball and cloth, rolling at ``speed`` into a cushion; the
+cushion is its ideal impulse (1 + e) M v along -x on the line at ``cushion_height`` above the table, a rectangular
+force pulse (`rigidbench.pulse`) through a force and a couple actuator (the model file says why a cushion geom
+cannot produce it). Measured from the end of the pulse on, like the cue strike (`CueStrike.measure`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from rigidbench import pulse
+from rigidbench.analytic import percussion
+from rigidbench.envs.cue_strike import CHECKS as CUE_CHECKS
+from rigidbench.envs.cue_strike import CueStrike, CueStrikeEnv, settle
+from rigidbench.params import GeomFriction, Gravity, Numeric, Param, Range, ScaledBodyMass, SphereRadius, positive
+from rigidbench.scenario import Case, Check
+from rigidbench.simulate import Trajectory
+
+_CUE = {c.name: c for c in CUE_CHECKS}
+CHECKS = (
+    Check(
+        "rebound-slip",
+        "m/s",
+        _CUE["initial-slip"].tolerance,
+        "abs",
+        _CUE["initial-slip"].reason,
+        "B1: u' = (1 + e) v (h M R / I - 1) = (1 + e) v (5 h / (2R) - 1), h = H - R; zero at H = 7/10 of the "
+        "diameter ([H] 'bumper height')",
+    ),
+    *(_CUE[name] for name in ("time-to-roll", "final-speed", "residual-slip", "lift-height")),
+)
+_SKID = tuple(c.name for c in CHECKS)
+_NO_SKID = ("rebound-slip", "final-speed", "residual-slip", "lift-height")
+
+
+class CushionRebound(CueStrike):
+    """A rolling ball rebounds from a cushion of nose height ``cushion_height``: the slip the rebound leaves
+    (zero at 7/10 of the diameter, THEORY.md B1) and the skid back to rolling (B2)."""
+
+    slug = "cushion-rebound"
+    title = "Rolling ball rebounding from a cushion: no skid at 7/10 of the diameter"
+    env_id = "rigidbench/CushionRebound-v0"
+    params = (
+        Param(
+            "radius", "m", "radius R of the solid ball (I = 2/5 M R^2)", Range(1e-3, 1.0), SphereRadius("ball", "ball")
+        ),
+        Param("mass", "kg", "mass M of the ball", Range(1e-6, 100.0), ScaledBodyMass("ball")),
+        Param(
+            "mu",
+            "1",
+            "Coulomb friction coefficient between ball and cloth",
+            positive(2.0),
+            GeomFriction(("ball", "table")),
+        ),
+        Param(
+            "speed",
+            "m/s",
+            "speed v of the ball, rolling without slip, toward the cushion",
+            positive(20.0),
+            Numeric("speed"),
+        ),
+        Param(
+            "cushion_height",
+            "m",
+            "height H of the cushion's nose above the table, 0 < H < 2R",
+            positive(2.0),
+            Numeric("cushion_height"),
+        ),
+        Param(
+            "restitution", "1", "coefficient of restitution e of the cushion", Range(0.0, 1.0), Numeric("restitution")
+        ),
+        Param("g", "m/s^2", "gravitational acceleration (along -z)", positive(100.0), Gravity()),
+    )
+    cases = (
+        Case(
+            "no-skid",
+            "nose at H = 7/10 of the diameter: the ball comes back rolling",
+            {"cushion_height": lambda p: 1.4 * p["radius"]},
+            _NO_SKID,
+        ),
+        Case(
+            "equator",
+            "nose at the ball's centre height: the spin is untouched, the ball comes back skidding",
+            {"cushion_height": lambda p: p["radius"]},
+            _SKID,
+        ),
+        Case("low", "nose at H = 0.6 of the diameter", {"cushion_height": lambda p: 1.2 * p["radius"]}, _SKID),
+        Case(
+            "high",
+            "nose at H = 0.8 of the diameter: overspin reversed",
+            {"cushion_height": lambda p: 1.6 * p["radius"]},
+            _SKID,
+        ),
+    )
+    checks = CHECKS
+
+    def validate(self, params: Mapping[str, Any]) -> None:
+        r, h = params["radius"], params["cushion_height"]
+        if not 0 < h < 2 * r:
+            raise ValueError(
+                f"parameter 'cushion_height' = {h:g} m is outside the valid range (0, {2 * r:g}) m "
+                f"(the ball's diameter): the cushion must touch the ball"
+            )
+
+    def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
+        settle(model, data)
+        speed, radius = params["speed"], float(model.geom("ball").size[0])
+        data.qvel[:] = [speed, 0, 0, 0, speed / radius, 0]  # rolling along +x (body frame = world frame here)
+
+    def after_blow(self, model: mujoco.MjModel, data: mujoco.MjData) -> tuple[percussion.SkidToRoll, float]:
+        p = self.read_params(model)
+        radius, mass = p["radius"], p["mass"]
+        inertia = float(model.body("ball").inertia[1])
+        v, spin = float(data.qvel[0]), float(data.qvel[4])  # the state simulated (world = body axes at t = 0)
+        impulse = -(1 + p["restitution"]) * mass * v  # along x, on the line at h = H - R above the centre
+        h = p["cushion_height"] - radius
+        theory = percussion.skid_to_roll(
+            radius, p["mu"], p["g"], v + impulse / mass, spin + impulse * h / inertia, inertia / (mass * radius**2)
+        )
+        return theory, v
+
+    def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
+        out = super().predict(model, data)
+        out["rebound-slip"] = out.pop("initial-slip")
+        return out
+
+    def control(self, model: mujoco.MjModel, timestep: float, nstep: int) -> np.ndarray:
+        p = self.read_params(model)
+        impulse = -(1 + p["restitution"]) * p["mass"] * p["speed"]
+        ctrl = pulse.control(model, nstep, "push", impulse)
+        ctrl += pulse.control(model, nstep, "couple", impulse * (p["cushion_height"] - p["radius"]))
+        return ctrl
+
+    def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
+        out = super().measure(model, traj, prediction)
+        out["rebound-slip"] = out.pop("initial-slip")
+        return out
+
+
+class CushionReboundEnv(CueStrikeEnv):
+    """``rigidbench/CushionRebound-v0``: a rolling ball rebounds from a cushion, scored against theory every step.
+
+    Description
+        A solid ball rolls at ``speed`` on a cloth with Coulomb friction ``mu`` into a cushion whose nose is at
+        ``cushion_height`` H above the table. ``reset`` delivers the cushion's impulse (1 + e) M v as a 1 ms pulse
+        on the line at H. With zero action the ball comes back rolling if H = 7/10 of the diameter (THEORY.md
+        B1), otherwise with slip u' = (1 + e) v (5 (H - R) / (2R) - 1), and skids back to rolling (B2).
+
+    Observation Space
+        As `CueStrikeEnv`: x, height above rest, v_x, v_z, omega_y, slip (m, m, m/s, m/s, rad/s, m/s).
+
+    Action Space
+        As `CueStrikeEnv`: Box(-0.1, 0.1, (2,)): extra force f_x (N) and torque tau_y (N m); clipped.
+
+    Rewards
+        As `CueStrikeEnv`: ``-|x - x_theory(t)| / max(|s|, R)`` after the rebound.
+
+    Starting State
+        Rolling at ``speed`` toward +x at the resting height; the rebound happens during ``reset``.
+
+    Episode End
+        Truncated after the pulse + 1.5 times the time to roll again (at least 50 ms); terminated on divergence.
+
+    Arguments
+        ``case`` (no-skid, equator, low, high), ``params`` (radius, mass, mu, speed, cushion_height, restitution,
+        g), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e. 0.1 ms), ``render_mode``.
+
+    Version History
+        v0: initial version.
+    """
+
+    scenario_cls = CushionRebound

@@ -1,0 +1,238 @@
+"""The meter stick on ice with two marbles (THEORY.md P6): struck so that its centre of percussion is at marble A,
+it leaves A alone and knocks C away; struck elsewhere, it pushes A. The MuJoCo side, and its gymnasium env.
+
+Theory: THEORY.md P6 (Harter, Unit 6 Ch. 2: the "Zamboni ice shot"; the figure is lost, this is THEORY.md's
+reconstruction, rule 2: a marble at the stick's end is undisturbed if the stick is struck at h = l/3 from the
+centre, l = L/2), P1-P2 for the stick's velocity field after the blow, and P5 for each marble's collision with
+the moving stick (`rigidbench.analytic.percussion.stick_hits_ball`).
+Model: ``models/marble_shot.xml``: a free stick along y, marbles A at y = -L/2 and C at y = +L/2 in front of its
++x face, each ``gap`` (1 mm) away; the blow is a 5 us force pulse (`rigidbench.pulse`) along +x at ``offset``
+on C's side; the marbles are real bodies hit through elastic, frictionless contacts (`rigidbench.contact`).
+
+The prediction follows the events in order: the blow (P1), then the marble whose stick point arrives first (the
+faster one; with equal gaps, C), then the other with the stick's velocities after the first collision. A marble
+whose stick point does not approach it (at or beyond the centre of percussion) is not hit.
+
+What this shows about P6: the blow itself leaves A's end at rest (the ``stick-speed-at-a`` check), but C's recoil
+impulse J (at s = +l) sets A's end (s = -l) moving forward at -J (1/M - l^2 / I) = 2J/M for the uniform stick
+(I = M l^2 / 3), and A is then pushed after all: with 5 g marbles on a 250 g stick, A leaves at ~1.1 m/s while C
+flies off at 14.8 m/s. "A undisturbed" holds for the blow, or for marbles much lighter than the stick.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from rigidbench import contact, pulse
+from rigidbench.analytic import percussion
+from rigidbench.envs.planar import BlowEnv, body_state, free_body_motion
+from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
+from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.simulate import Trajectory
+
+_C_HIT = (
+    "C is hit ~0.1 ms after the blow, when the stick has turned by ~1e-3 rad: face tilt and contact-point "
+    "shift O(theta^2), ~w theta / L (w = 2 mm half-thickness); contact switching between RK4 steps ~1e-5 at 200 "
+    "steps per contact (measured <= 3e-6)"
+)
+_A_HIT = (
+    "A is hit after C (by C's recoil alone at the centre of percussion, ~1.7 ms after the blow): by then the "
+    "stick has turned by theta_A ~ 0.014 rad and its end approaches A faster than the unturned closed form "
+    "says by ~V theta_A^2 / 2, ~5e-4 relative (converged in dt and k); ~1e-5 in the near-centre case (theta_A "
+    "~ 2e-3)"
+)
+CHECKS = (
+    Check(
+        "stick-speed-at-a",
+        "m/s",
+        1e-6,
+        "abs",
+        "the stick point at A's end right after the 5 us pulse, V - omega s_A from the measured V and omega: the "
+        "pulse turns the stick by <= |omega| tau / 2 ~ 2e-5 rad, torque error ~ (omega tau)^2 ~ 1e-9",
+        "P2: v(s) = (Pi/M)(1 + s h / rho^2), zero at s = -p; P6 rule 2: p = l at h = l/3",
+    ),
+    Check(
+        "marble-a-speed",
+        "m/s",
+        1e-3,
+        "rel",
+        _A_HIT,
+        "P6 + P5: A is not pushed by the blow at the centre of percussion, but C's recoil impulse J sets A's end "
+        "moving at 2J/M (uniform stick); A then leaves at (1 + e) M_eff v_A / (m + M_eff)",
+    ),
+    Check(
+        "marble-c-speed",
+        "m/s",
+        5e-5,
+        "rel",
+        _C_HIT,
+        "P6 + P5: C is hit by the stick's end at v_C = V - omega s_C: (1 + e) M_eff v_C / (m + M_eff)",
+    ),
+)
+_ALL = tuple(c.name for c in CHECKS)
+
+
+class MarbleShot(Scenario):
+    """The meter stick on ice between marbles A (one end) and C (the other): struck at offset L/6 toward C, its
+    centre of percussion sits at A and A stays put while C flies off (THEORY.md P6)."""
+
+    slug = "marble-shot"
+    title = "Meter stick on ice with marbles: struck so the centre of percussion is at A, A stays, C flies"
+    env_id = "rigidbench/MarbleShot-v0"
+    params = (
+        Param("mass", "kg", "mass M of the stick", Range(1e-6, 1e3), ScaledBodyMass("stick")),
+        Param(
+            "length",
+            "m",
+            "full length L of the uniform stick; I = M L^2 / 12; the marbles sit at its ends",
+            Range(1e-3, 100.0),
+            RodLength("stick", "stick"),
+        ),
+        Param(
+            "impulse", "N s", "impulse Pi of the blow, along +x (toward the marbles)", positive(1e3), Numeric("impulse")
+        ),
+        Param(
+            "offset",
+            "m",
+            "distance h from the centre to the strike point, toward C's end, in (0, L/2]",
+            positive(50.0),
+            SitePosition("strike", 1),
+        ),
+    )
+    cases = (
+        Case(
+            "cop-at-a",
+            "struck at h = L/6 (= l/3): the centre of percussion is at A's end, A is not pushed, C is",
+            {"offset": lambda p: p["length"] / 6},
+            _ALL,
+        ),
+        Case(
+            "near-centre",
+            "struck at h = L/12: A's end moves forward at V/2 and pushes A too",
+            {"offset": lambda p: p["length"] / 12},
+            _ALL,
+        ),
+    )
+    checks = CHECKS
+
+    def validate(self, params: Mapping[str, Any]) -> None:
+        if params["offset"] > params["length"] / 2:
+            raise ValueError(
+                f"parameter 'offset' = {params['offset']:g} m is outside the valid range "
+                f"(0, {params['length'] / 2:g}] m (half the stick's length = {params['length']:g} m):"
+                " the blow must hit the stick"
+            )
+
+    def check_model(self, model: mujoco.MjModel) -> None:
+        solref = model.geom("stick").solref
+        if solref[0] < 0:
+            contact.elastic_contact(timestep=float(model.opt.timestep), stiffness=float(-solref[0]))
+
+    def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
+        size = model.geom("stick").size
+        gap = float(model.numeric("gap").data[0])
+        data.qvel[:] = 0.0
+        for body, y in (("stick", 0.0), ("marble_a", -size[1]), ("marble_c", size[1])):
+            x = 0.0 if body == "stick" else size[0] + model.geom(body).size[0] + gap
+            adr = model.jnt_qposadr[model.body(body).jntadr[0]]
+            data.qpos[adr : adr + 7] = [x, y, 0, 1, 0, 0, 0]
+
+    def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
+        stick = model.body("stick")
+        mass, inertia = float(stick.mass[0]), float(stick.inertia[2])
+        impulse = float(model.numeric("impulse").data[0])
+        offset = float(model.site("strike").pos[1])
+        blow = percussion.struck_stick(mass, inertia, impulse, offset)
+        s = {name: float(body_state(model, data, name).com_W[0, 1]) for name in ("marble_a", "marble_c")}
+        v, w = blow.com_velocity, blow.angular_velocity
+        order = sorted(s, key=lambda name: -(v - w * s[name]))  # the faster-approached marble is hit first
+        speeds = {}
+        for name in order:
+            hit = percussion.stick_hits_ball(mass, inertia, v, w, s[name], float(model.body(name).mass[0]))
+            speeds[name], v, w = hit.ball_velocity, hit.com_velocity, hit.angular_velocity
+        gap = float(model.numeric("gap").data[0])
+        fastest = max(blow.point_velocity(s["marble_a"]), blow.point_velocity(s["marble_c"]))
+        return {
+            "_theory": blow,
+            "_tau": pulse.duration(model),
+            "_t_first_hit": pulse.duration(model) / 2 + gap / fastest,
+            "_s_a": s["marble_a"],
+            "stick-speed-at-a": float(blow.point_velocity(s["marble_a"])),
+            "marble-a-speed": speeds["marble_a"],
+            "marble-c-speed": speeds["marble_c"],
+        }
+
+    def duration(self, prediction: Mapping[str, Any]) -> float:
+        # both collisions are over within ~2 ms at the defaults; run until the stick has turned by 0.05 rad
+        return prediction["_tau"] + max(0.05 / abs(prediction["_theory"].angular_velocity), 3e-3)
+
+    def control(self, model: mujoco.MjModel, timestep: float, nstep: int) -> np.ndarray:
+        return pulse.control(model, nstep, "strike", float(model.numeric("impulse").data[0]))
+
+    def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
+        stick = free_body_motion(model, traj, "stick")
+        n = pulse.steps(model)
+        at_a = stick.point_velocity_W(np.array([0.0, prediction["_s_a"], 0.0]))[n]
+        return {
+            "stick-speed-at-a": float(at_a[0]),
+            "marble-a-speed": float(np.linalg.norm(free_body_motion(model, traj, "marble_a").v_W[-1])),
+            "marble-c-speed": float(np.linalg.norm(free_body_motion(model, traj, "marble_c").v_W[-1])),
+        }
+
+
+class MarbleShotEnv(BlowEnv):
+    """``rigidbench/MarbleShot-v0``: the meter stick and two marbles on ice, scored against theory every step.
+
+    Description
+        A uniform stick (``mass``, ``length``) lies on frictionless ice along world y with marble A 1 mm in front
+        of one end and marble C 1 mm in front of the other. ``reset`` strikes it toward the marbles (a 5 us
+        pulse of impulse ``impulse`` at ``offset`` from its centre, on C's side). With zero action, struck at L/6
+        (THEORY.md P6), its centre of percussion is at A's end: A stays put while C is knocked away.
+
+    Observation Space
+        See `BlowEnv`: the *stick's* CM position (x, y) (m), heading (rad), CM velocity (v_x, v_y) (m/s) and
+        omega_z (rad/s), shape (6,), float64.
+
+    Action Space
+        Box(-0.1, 0.1, (3,)), float64: extra force (f_x, f_y) (N) at the stick's CM and torque tau_z (N m), world
+        frame, through ``xfrc_applied``; clipped. Zero action = the textbook problem.
+
+    Rewards
+        ``reward = -(|x - V t'| + |y|) / L - |heading - omega t'| / pi`` until the first marble is hit (t' from
+        the pulse's centroid; as `StruckStickEnv`), 0 afterwards (no closed form for the stick's motion through
+        the collisions; ``info["predicted"]`` then holds NaN): the negative deviation of the stick's pose
+        from P1.
+
+    Starting State
+        Stick at rest at the origin, marbles at rest 1 mm in front of its ends, then struck during ``reset``.
+
+    Episode End
+        Truncated when the stick has turned by 0.05 rad (at least 3 ms); terminated on divergence.
+
+    Arguments
+        ``case`` (cop-at-a, near-centre), ``params`` (mass, length, impulse, offset), ``profile``, ``integrator``,
+        ``timestep``, ``frame_skip`` (default 10, i.e. 10 us), ``render_mode``.
+
+    Version History
+        v0: initial version.
+    """
+
+    scenario_cls = MarbleShot
+    body = "stick"
+
+    observables = ("x", "y", "heading")
+
+    def _theory(self, t: np.ndarray) -> np.ndarray:
+        pose = self._stick_pose_theory(t)
+        pose[np.asarray(t) >= self.prediction["_t_first_hit"]] = np.nan  # not scored after the first collision
+        return pose
+
+    def _measure(self, obs: np.ndarray) -> np.ndarray:
+        return obs[:3]
+
+    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        return self._pose_deviation(measured, predicted)

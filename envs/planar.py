@@ -1,0 +1,155 @@
+"""The physics layer shared by the percussion scenarios: free bodies moving in a plane, and blows.
+
+Turns MuJoCo's free-joint state rows into named planar quantities (house rule 6): the body turns only about
+world z, so its heading is the angle of body y from world y and omega_z is both the body- and world-frame
+component. Works on whole trajectories (vectorised over time) or single states. `BlowEnv` is the env plumbing for
+scenarios whose episode starts with a blow: the scenario's pulse (`Scenario.control`) is delivered during
+``reset`` (the `ScenarioEnv._begin` hook), so an episode starts just after the blow.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import ClassVar
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+
+from rigidbench import frames, pulse
+from rigidbench.envs.base import ScenarioEnv
+from rigidbench.simulate import Trajectory
+
+
+@dataclass(frozen=True)
+class PlanarMotion:
+    """One free body's motion, from its free-joint qpos [x, y, z, qw, qx, qy, qz] and qvel [v_W, omega_B].
+
+    Attributes
+    ----------
+    time : ndarray, shape (n,)
+    qpos : ndarray, shape (n, 7)
+    qvel : ndarray, shape (n, 6)
+    """
+
+    time: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray
+
+    @cached_property
+    def R_WB(self) -> np.ndarray:
+        return frames.quat_to_matrix(self.qpos[..., 3:7])
+
+    @property
+    def com_W(self) -> np.ndarray:
+        """Position of the body origin (its CM in these models), world frame (m), shape (n, 3)."""
+        return self.qpos[..., 0:3]
+
+    @property
+    def v_W(self) -> np.ndarray:
+        """Velocity of the body origin, world frame (m/s), shape (n, 3)."""
+        return self.qvel[..., 0:3]
+
+    @cached_property
+    def omega_W(self) -> np.ndarray:
+        """Angular velocity, world frame (rad/s), shape (n, 3)."""
+        return frames.body_to_world(self.R_WB, self.qvel[..., 3:6])
+
+    @cached_property
+    def heading(self) -> np.ndarray:
+        """Angle (rad) of body y from world y, counter-clockwise about world z (unwrapped over time)."""
+        axis = self.R_WB[..., :, 1]
+        return np.unwrap(np.arctan2(-axis[..., 0], axis[..., 1]), axis=0)
+
+    def point_W(self, p_B: np.ndarray) -> np.ndarray:
+        """World position (m) of the body point with body-frame coordinates `p_B`, shape (n, 3)."""
+        return self.com_W + frames.body_to_world(self.R_WB, np.broadcast_to(p_B, self.com_W.shape))
+
+    def point_velocity_W(self, p_B: np.ndarray) -> np.ndarray:
+        """World velocity (m/s) of the body point `p_B` (body frame), shape (n, 3)."""
+        r_W = frames.body_to_world(self.R_WB, np.broadcast_to(p_B, self.com_W.shape))
+        return self.v_W + np.cross(self.omega_W, r_W)
+
+    def point_acceleration_W(self, p_B: np.ndarray) -> np.ndarray:
+        """World acceleration (m/s^2) of the body point `p_B` of a body moving freely (no force, no torque):
+        the centripetal omega x (omega x r); exact between blows."""
+        r_W = frames.body_to_world(self.R_WB, np.broadcast_to(p_B, self.com_W.shape))
+        return np.cross(self.omega_W, np.cross(self.omega_W, r_W))
+
+
+def free_body_motion(model: mujoco.MjModel, traj: Trajectory, body: str) -> PlanarMotion:
+    """The planar motion of the free `body` of `model` over a trajectory."""
+    jnt = model.body(body).jntadr[0]
+    qa, va = model.jnt_qposadr[jnt], model.jnt_dofadr[jnt]
+    return PlanarMotion(time=traj.time, qpos=traj.qpos[:, qa : qa + 7], qvel=traj.qvel[:, va : va + 6])
+
+
+def body_state(model: mujoco.MjModel, data: mujoco.MjData, body: str) -> PlanarMotion:
+    """The planar state of the free `body` now (arrays of length 1)."""
+    jnt = model.body(body).jntadr[0]
+    qa, va = model.jnt_qposadr[jnt], model.jnt_dofadr[jnt]
+    return PlanarMotion(
+        time=np.array([data.time]), qpos=data.qpos[None, qa : qa + 7].copy(), qvel=data.qvel[None, va : va + 6].copy()
+    )
+
+
+class BlowEnv(ScenarioEnv):
+    """Env plumbing for one body struck at the start of the episode.
+
+    ``reset`` delivers the scenario's blow (its `Scenario.control` pulse, in `_begin`) before returning, so the first
+    observation is the state just after the blow; the action is then a small extra planar force and torque on
+    `body` (world frame, through ``xfrc_applied``): (f_x N, f_y N, tau_z N m), clipped to +-`max_force`.
+    Zero action is the textbook problem. Observation (float64, shape (6,)):
+
+    ==== =============================================== ======= ============================
+    idx  quantity                                        unit    MuJoCo source
+    ==== =============================================== ======= ============================
+    0-1  position of the body's CM (x, y), world         m       free joint qpos[0:2]
+    2    heading: angle of body y from world y, about z  rad     free joint quaternion
+    3-4  CM velocity (v_x, v_y), world                   m/s     free joint qvel[0:2]
+    5    angular velocity omega_z                        rad/s   free joint qvel[5]
+    ==== =============================================== ======= ============================
+    """
+
+    body: ClassVar[str]
+    max_force: ClassVar[float] = 0.1
+
+    def _begin(self) -> None:
+        if self.model.nu:  # a model with an actuator is struck by a pulse (rigidbench.pulse)
+            for row in self.scenario.control(self.model, self.model.opt.timestep, pulse.steps(self.model)):
+                self.data.ctrl[:] = row
+                mujoco.mj_step(self.model, self.data)
+            self.data.ctrl[:] = 0.0
+
+    def _observation_space(self) -> gym.spaces.Box:
+        return gym.spaces.Box(-np.inf, np.inf, shape=(6,), dtype=np.float64)
+
+    def _action_space(self) -> gym.spaces.Box:
+        return gym.spaces.Box(-self.max_force, self.max_force, shape=(3,), dtype=np.float64)
+
+    def _state(self) -> PlanarMotion:
+        return body_state(self.model, self.data, self.body)
+
+    def _observation(self) -> np.ndarray:
+        s = self._state()
+        return np.array([*s.com_W[0, :2], s.heading[0], *s.v_W[0, :2], s.omega_W[0, 2]])
+
+    def _apply_action(self, action: np.ndarray) -> None:
+        self.data.xfrc_applied[self.model.body(self.body).id] = [action[0], action[1], 0.0, 0.0, 0.0, action[2]]
+
+    def _stick_pose_theory(self, t: np.ndarray) -> np.ndarray:
+        """(x, y, heading) of a stick struck by the scenario's blow, free afterwards (P1): CM at V t', heading
+        omega t', with t' = t - tau/2 from the pulse's centroid; shape (len(t), 3)."""
+        theory = self.prediction["_theory"]
+        tp = np.asarray(t) - 0.5 * self.prediction["_tau"]
+        return np.stack([theory.com_velocity * tp, np.zeros_like(tp), theory.angular_velocity * tp], axis=1)
+
+    def _pose_deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+        """(|dx| + |dy|) / L + |d heading| / pi (heading difference wrapped to (-pi, pi]); 0 where the theory
+        is NaN (not scored)."""
+        if np.isnan(predicted).any():
+            return 0.0
+        dx, dy = measured[0] - predicted[0], measured[1] - predicted[1]
+        dh = (measured[2] - predicted[2] + np.pi) % (2 * np.pi) - np.pi
+        return float((abs(dx) + abs(dy)) / self.params["length"] + abs(dh) / np.pi)
