@@ -282,17 +282,20 @@ class ShotTask(TaskEnv):
     def _episode_end(self) -> tuple[bool, bool]:
         return True, False
 
-    def _run_scenario(self, overrides: Mapping[str, Any], measure=None) -> dict[str, float] | None:
+    def _run_scenario(
+        self, overrides: Mapping[str, Any], measure=None, max_duration: float = math.inf
+    ) -> dict[str, float] | None:
         """Simulate the scenario with `overrides` on the episode's parameters, exactly as its validation run does
         (`Scenario.run`: compile, initial state, predict, duration, open-loop control, `measure`), leave
         `self.data` at the final state and `self.prediction` at the action's closed-form prediction.
 
         `measure` (model, trajectory, prediction) -> dict replaces the scenario's `measure` where a task needs
-        only part of it. Returns the measured observables, or None if the simulation diverged.
+        only part of it; `max_duration` (s) caps the scenario's run. Returns the measured observables, or None if
+        the simulation diverged.
         """
         self._load(self._case_name, {**self._episode_params, **overrides})
         scenario, model = self.scenario, self.model
-        duration = float(scenario.duration(self.prediction))
+        duration = min(float(scenario.duration(self.prediction)), max_duration)
         nstep = steps_for(duration, model.opt.timestep)
         traj = simulate(model, self.data, duration, control=scenario.control(model, model.opt.timestep, nstep))
         self._show(traj.qpos[-1], traj.qvel[-1], float(traj.time[-1]))

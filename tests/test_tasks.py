@@ -136,3 +136,77 @@ def test_pendulum_energy_transfer_baseline_beats_other_drives():
     regrets = {name: _episode(env, drive, seed=0)[1] for name, drive in {**drives, "random": _random}.items()}
     print(f"\nPendulumEnergyTransfer-v0 regret (1 episode, T = {env.episode_duration:.1f} s): {regrets}")
     assert min(regrets.values()) > 2e-3
+
+
+# ---- CueShot-v0 (THEORY.md B1, B2) ---------------------------------------------------------------------------
+
+# Bound on the theory action's regret: the cue-strike scenario's own tolerance on the final speed (1e-5 relative);
+# the no-skid blow leaves a slip of ~3e-7 m/s, far below the 1e-3 v* that counts as skidding, so its skid term is
+# exactly 0. Measured at the task's 50 us step: 4.9e-8.
+CUE_TOLERANCE = 1e-5
+
+
+def test_cue_shot_theory_action_is_optimal_up_to_the_scenario_tolerances():
+    env = gym.make("rigidbench/CueShot-v0").unwrapped
+    regrets = [_episode(env, _theory, seed=s)[1] for s in range(6)]
+    env.action_space.seed(0)
+    random = [_episode(env, _random, seed=s)[1] for s in range(6)]
+    print(f"\nCueShot-v0 mean regret over 6 episodes: theory {np.mean(regrets):.3g}, random {np.mean(random):.3g}")
+    assert 0 <= np.mean(regrets) < CUE_TOLERANCE and max(regrets) < CUE_TOLERANCE
+    assert min(random) > -CUE_TOLERANCE  # nothing does better than the optimum (beyond the tolerance)
+    assert np.mean(random) > 0.1
+
+
+def test_cue_shot_strike_at_seven_tenths_of_the_diameter_does_not_skid():
+    """B1: struck at h = 2R/5 (H = 0.7 of the diameter) the ball rolls at once; struck through the centre it
+    skids with u0 = v0 and rolls at 5/7 v0 (B2)."""
+    env = gym.make("rigidbench/CueShot-v0").unwrapped
+    env.reset(options={"target": {"speed": 1.0}})
+    action = env.theory_action()
+    assert env._physical(action)[0] == pytest.approx(0.4 * env.params["radius"], rel=1e-12)
+    _obs, _r, _te, _tr, info = env.step(action)
+    assert info["skid_time"] == 0.0 and info["final_speed"] == pytest.approx(1.0, rel=1e-5)
+    env.reset(options={"target": {"speed": 1.0}})
+    _obs, reward, _te, _tr, info = env.step(np.array([0.0, action[1]]))
+    # Skid time to the slip's fall below 1e-3 v0: B2's t_r (1 - 1e-3), and MuJoCo's friction, a velocity-level
+    # constraint, lets the last of the slip decay exponentially (the scenario's time-to-roll: <= 0.7 ms late).
+    assert info["skid_time"] == pytest.approx(info["predicted_skid_time"], abs=1e-3)
+    assert info["final_speed"] == pytest.approx(5 / 7, rel=1e-5) and reward < -0.2
+
+
+# ---- PercussionStrike-v0 (THEORY.md P2, P5, P6) -------------------------------------------------------------
+
+# Bound on the theory action's regret: the marble-shot scenario's tolerance on C's speed (5e-5 relative: C is hit
+# when the stick has turned ~1e-3 rad) and the same geometry for A's end (~1e-5 of u*). Measured: <= 4.6e-6.
+PERCUSSION_TOLERANCE = 1e-4
+
+
+def test_percussion_strike_theory_action_is_optimal_up_to_the_scenario_tolerances():
+    env = gym.make("rigidbench/PercussionStrike-v0").unwrapped
+    regrets = [_episode(env, _theory, seed=s)[1] for s in range(5)]
+    env.action_space.seed(0)
+    random = [_episode(env, _random, seed=s)[1] for s in range(5)]
+    print(
+        f"\nPercussionStrike-v0 mean regret over 5 episodes: theory {np.mean(regrets):.3g}, "
+        f"random {np.mean(random):.3g}"
+    )
+    assert 0 <= np.mean(regrets) < PERCUSSION_TOLERANCE and max(regrets) < PERCUSSION_TOLERANCE
+    assert min(random) > -PERCUSSION_TOLERANCE and np.mean(random) > 0.1
+
+
+def test_percussion_strike_at_the_textbook_centre_of_percussion_pushes_a_through_cs_recoil():
+    """P6's h = L/6 leaves A's end at rest after the blow, but C's recoil (P5) then pushes A; the theory action,
+    h* = (L/6)(1 + r)/(1 - r) with r = 4m/(4m + M), leaves A untouched."""
+    env = gym.make("rigidbench/PercussionStrike-v0").unwrapped
+    env.reset(options={"target": {"speed": 10.0}})
+    action = env.theory_action()
+    m, big_m = 0.005, 0.25
+    r = 4 * m / (4 * m + big_m)
+    assert env._physical(action)[0] == pytest.approx((1 + r) / (1 - r) / 6, rel=1e-9)
+    info = env.step(action)[4]
+    assert info["marble_a_speed"] == 0.0 and abs(info["stick_at_a"]) < 1e-5 * 10
+    assert info["marble_c_speed"] == pytest.approx(10.0, rel=5e-5)
+    env.reset(options={"target": {"speed": 10.0}})
+    textbook = np.array([env._unlinear(1 / 6, env.offset_range), action[1]])
+    info = env.step(textbook)[4]
+    assert info["marble_a_speed"] > 0.05 * info["marble_c_speed"]  # A is pushed after all
