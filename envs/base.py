@@ -45,9 +45,6 @@ class ScenarioEnv(gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 30}
     scenario_cls: ClassVar[type[Scenario]]
     default_frame_skip: ClassVar[int] = 10
-    # Whether `gymnasium.make_vec` steps N copies' physics in one mujoco.rollout (rigidbench.envs.batched): only
-    # where that is faster than gymnasium's sync vector env and equal to it bit for bit (no contacts).
-    batched: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -135,16 +132,8 @@ class ScenarioEnv(gym.Env):
         return obs, info
 
     def step(self, action):
-        self._before_physics(action)
-        mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
-        return self._after_physics()
-
-    # A step is split around the physics, so that `rigidbench.envs.batched` can step many copies' physics at once.
-    def _before_physics(self, action) -> None:
         self._apply_action(self._checked_action(action))
-
-    def _after_physics(self):
-        """The step's (obs, reward, terminated, truncated, info), after `frame_skip` physics steps."""
+        mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
         self._k += 1
         obs = self._observation()
         if self._diverged(obs):

@@ -123,7 +123,6 @@ class RotorEnv(ScenarioEnv):
 
     max_torque: ClassVar[float] = 1.0
     body: ClassVar[str] = "top"
-    batched = True  # no contacts: rollout from the full physics state is bit-identical (benchmarks/vector_envs.py)
 
     def _observation_space(self) -> gym.spaces.Box:
         high = np.full(7, np.inf)

@@ -198,21 +198,6 @@ class ClosedLoopTask(TaskEnv):
         self._nsteps = max(1, round(self._task_duration / self._env_dt))
         self._scratch = mujoco.MjData(self.model)
 
-    def step(self, action):
-        self._before_physics(action)
-        mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
-        return self._after_physics()
-
-    # Split around the physics as `ScenarioEnv.step` is (`rigidbench.envs.batched`); same arithmetic as `_advance`.
-    def _before_physics(self, action) -> None:
-        action = self._checked_action(action)
-        self._pending = (action, self._reference_reward() if self._with_regret else math.nan)
-        self._apply_action(action)
-
-    def _after_physics(self):
-        action, reference = self._pending
-        return self._finish(reference, *self._outcome(action))
-
     def _advance(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
         self._apply_action(action)
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)

@@ -86,9 +86,4 @@ def register_envs() -> None:
 
     for env_id, cls in env_classes().items():
         if env_id not in gymnasium.registry:
-            vector = None
-            if getattr(cls, "batched", False):  # physics of N copies in one mujoco.rollout (rigidbench.envs.batched)
-                from rigidbench.envs.batched import BatchedVectorEnv
-
-                vector = functools.partial(BatchedVectorEnv, cls)
-            gymnasium.register(id=env_id, entry_point=f"{cls.__module__}:{cls.__qualname__}", vector_entry_point=vector)
+            gymnasium.register(id=env_id, entry_point=f"{cls.__module__}:{cls.__qualname__}")
