@@ -330,7 +330,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
     chosen = [registry.get(s) for s in args.scenarios] if args.scenarios else list(registry.scenarios().values())
     for sc in chosen:
-        print(f"{sc.slug}  ({sc.env_id})\n  {sc.title}")
+        print(f"{sc.slug}  ({sc.env_id or 'no gymnasium env'})\n  {sc.title}")
         defaults = sc.defaults()
         print("  parameters:")
         for p in sc.params:
@@ -342,7 +342,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
             print(f"    {c.name:<18} {c.doc}")
         print("  checks:")
         for ch in sc.checks:
-            print(f"    {ch.name:<24} tol {ch.tolerance:.0e} {ch.kind:<3}  [{ch.theory}]")
+            print(f"    {ch.name:<24} tol {ch.tolerance:.3g} {ch.kind:<3}  [{ch.theory}]")
         print()
     return EXIT_OK
 

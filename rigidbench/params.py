@@ -86,7 +86,12 @@ class BodyComOffset:
 
 @dataclass(frozen=True)
 class ContactStiffness:
-    """Stiffness k (1/s^2) of an elastic contact on the named geoms: solref = (-k, 0) (`rigidbench.contact`)."""
+    """Stiffness k (1/s^2) of an elastic contact on the named geoms: solref = (-k, 0) (`rigidbench.contact`).
+
+    Read back as the stiffness MuJoCo uses: -solref[0] in the direct format; for a standard-format solref (a
+    profile such as ``mujoco-default`` replaced it) the equivalent spring 1/(tau zeta)^2 of
+    `rigidbench.contact.contact_spring`, which then comes with damping.
+    """
 
     geoms: tuple[str, ...]
 
@@ -95,7 +100,25 @@ class ContactStiffness:
             spec.geom(name).solref = [-float(value), 0.0]
 
     def read(self, model: mujoco.MjModel) -> Value:
-        return float(-model.geom(self.geoms[0]).solref[0])
+        from rigidbench.contact import contact_spring
+
+        return contact_spring(model.geom(self.geoms[0]).solref, model.opt.timestep).stiffness
+
+
+@dataclass(frozen=True)
+class GeomSize:
+    """One entry of a geom's size (m), e.g. index 0 = a sphere's radius."""
+
+    geom: str
+    index: int = 0
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        size = np.array(spec.geom(self.geom).size, dtype=float)
+        size[self.index] = float(value)
+        spec.geom(self.geom).size = size
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        return float(model.geom(self.geom).size[self.index])
 
 
 @dataclass(frozen=True)

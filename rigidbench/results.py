@@ -156,7 +156,7 @@ def table(rows: Iterable[dict[str, Any]]) -> str:
     header = ("target", "check", "measured", "expected", "unit", "error", "tolerance", "verdict")
     lines = []
     for r in rows:
-        tol = "-" if r["tolerance"] is None else f"{r['tolerance']:.0e} {r['tolerance_kind']}"
+        tol = "-" if r["tolerance"] is None else f"{r['tolerance']:.3g} {r['tolerance_kind']}"
         err = "-" if r["error"] is None else f"{r['error']:.2e}"
         verdict = f"DIVERGED at t={r['diverged_at']:.4g} s" if r["status"] == DIVERGED else r["status"].upper()
         lines.append(

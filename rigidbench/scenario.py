@@ -9,6 +9,7 @@ the gymnasium env, the dm_env task and the tests are views of it.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import importlib.resources
 import math
@@ -60,7 +61,9 @@ class Check:
     unit : str
         Unit of `measured` and `expected`.
     tolerance : float
-        Largest accepted error, in the unit for ``kind="abs"``, a fraction for ``kind="rel"``.
+        Largest accepted error, in the unit for ``kind="abs"``, a fraction for ``kind="rel"``. A bound that
+        depends on the run (n^-1/2, k^-1/2) is given at the model's defaults here and replaced by the run's
+        prediction (``prediction["_tolerance"][name]``, see `Scenario._scaled_check`).
     kind : {"rel", "abs"}
         Relative error ``|m - e| / |e|`` or absolute error ``|m - e|``.
     reason : str
@@ -134,8 +137,8 @@ class Scenario:
     cases : tuple of Case
         The first case is the default.
     checks : tuple of Check
-    env_id : str
-        Gymnasium id, e.g. ``"rigidbench/HeavyTop-v0"``.
+    env_id : str or None
+        Gymnasium id, e.g. ``"rigidbench/HeavyTop-v0"``; None for a scenario with no stepping env.
     """
 
     slug: ClassVar[str]
@@ -143,7 +146,7 @@ class Scenario:
     params: ClassVar[tuple[Param, ...]]
     cases: ClassVar[tuple[Case, ...]]
     checks: ClassVar[tuple[Check, ...]]
-    env_id: ClassVar[str]
+    env_id: ClassVar[str | None]
 
     # ---- hooks -------------------------------------------------------------------------------------------
 
@@ -182,6 +185,22 @@ class Scenario:
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
         """The measured value of each check, from the trajectory."""
         raise NotImplementedError
+
+    def simulate(
+        self, model: mujoco.MjModel, data: mujoco.MjData, duration: float, *, control: np.ndarray | None = None
+    ) -> Trajectory:
+        """Run the case from the state in `data`: one rollout by default. Batch scenarios (Monte Carlo over
+        initial states, extra runs at other settings) override it and return any object with the attributes
+        `measure` needs plus ``time`` (the sample times of one run) and ``diverged_at``."""
+        return simulate(model, data, duration, control=control)
+
+    def _scaled_check(self, name: str, prediction: Mapping[str, Any]) -> Check:
+        """The check, with its tolerance replaced by ``prediction["_tolerance"][name]`` when the prediction
+        gives one: a bound that depends on the run (a Monte Carlo error ~ n^-1/2, a contact-stiffness bound
+        ~ k^-1/2). The check's `reason` must state the formula."""
+        check = self.check(name)
+        tolerance = prediction.get("_tolerance", {}).get(name)
+        return check if tolerance is None else dataclasses.replace(check, tolerance=float(tolerance))
 
     # ---- the core ---------------------------------------------------------------------------------------
 
@@ -311,12 +330,15 @@ class Scenario:
         duration = float(self.duration(prediction))
         t0 = _time.perf_counter()
         nstep = steps_for(duration, model.opt.timestep)
-        traj = simulate(model, data, duration, control=self.control(model, model.opt.timestep, nstep))
+        traj = self.simulate(model, data, duration, control=self.control(model, model.opt.timestep, nstep))
         wall = _time.perf_counter() - t0
         outcomes = []
         if traj.diverged_at is None:
             measured = self.measure(model, traj, prediction)
-            outcomes = [Outcome(self.check(name), float(measured[name]), float(prediction[name])) for name in c.checks]
+            outcomes = [
+                Outcome(self._scaled_check(name, prediction), float(measured[name]), float(prediction[name]))
+                for name in c.checks
+            ]
         return CaseRun(
             scenario=self.slug,
             case=c.name,

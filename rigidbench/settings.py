@@ -12,6 +12,11 @@ mujoco-default
     What a user gets by writing the model naively: MuJoCo's default integrator (Euler), 2 ms step, default
     solref/solimp on every geom and equality constraint, pyramidal friction cone. Failures here are the
     benchmark's findings.
+thorough
+    The reference settings with at least `THOROUGH_SAMPLES` Monte Carlo samples in statistical scenarios.
+
+Monte Carlo sample counts: a scenario that draws samples keeps its count in ``<numeric name="samples">``
+(its public parameter, e.g. ``n``, targets that entry); `Settings.samples` raises it to at least that many.
 """
 
 from __future__ import annotations
@@ -33,6 +38,9 @@ MUJOCO_DEFAULT_SOLREF = (0.02, 1.0)
 MUJOCO_DEFAULT_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
 MUJOCO_DEFAULT_TIMESTEP = 0.002
 
+# Samples in the thorough profile: a goodness-of-fit test with ~20 bins then resolves bin probabilities to ~1 %.
+THOROUGH_SAMPLES = 100_000
+
 # Largest timestep accepted (s): beyond this no scenario here is meaningful, and MuJoCo accepts anything.
 MAX_TIMESTEP = 0.1
 
@@ -50,6 +58,8 @@ class Settings:
     solref, solimp : tuple of float or None
         Applied to every geom, explicit contact pair and equality constraint (MuJoCo's constraint softness;
         MuJoCo's defaults are the same for all three).
+    samples : int or None
+        Least number of Monte Carlo samples (raises the model's ``<numeric name="samples">``, if it has one).
     """
 
     integrator: str | None = None
@@ -57,6 +67,7 @@ class Settings:
     cone: str | None = None
     solref: tuple[float, ...] | None = None
     solimp: tuple[float, ...] | None = None
+    samples: int | None = None
 
     def __post_init__(self) -> None:
         if self.integrator is not None and self.integrator not in INTEGRATORS:
@@ -65,6 +76,8 @@ class Settings:
             raise ValueError(f"timestep = {self.timestep!r} s is outside the valid range (0, {MAX_TIMESTEP}] s")
         if self.cone is not None and self.cone not in CONES:
             raise ValueError(f"cone {self.cone!r} is not one of {', '.join(CONES)}")
+        if self.samples is not None and not (isinstance(self.samples, int) and self.samples >= 1):
+            raise ValueError(f"samples = {self.samples!r} must be an integer >= 1")
 
     def merged(self, other: Settings) -> Settings:
         """These settings with every field `other` sets replaced by `other`'s value."""
@@ -84,6 +97,9 @@ class Settings:
                 element.solref = list(self.solref)
             if self.solimp is not None:
                 element.solimp = list(self.solimp)
+        samples = spec.numeric("samples")
+        if self.samples is not None and samples is not None:
+            samples.data = [max(float(samples.data[0]), float(self.samples))]
 
 
 PROFILES: dict[str, Settings] = {
@@ -95,6 +111,7 @@ PROFILES: dict[str, Settings] = {
         solref=MUJOCO_DEFAULT_SOLREF,
         solimp=MUJOCO_DEFAULT_SOLIMP,
     ),
+    "thorough": Settings(samples=THOROUGH_SAMPLES),
 }
 
 

@@ -96,7 +96,8 @@ def simulate(
         if control.shape != (nstep, model.nu):
             raise ValueError(f"control has shape {control.shape}, expected ({nstep}, {model.nu})")
         kwargs["control"] = control[None]
-    states, _ = rollout.rollout(model, data, state0[None], nstep=nstep, **kwargs)
+    # rollout steps the MjData it is given: a scratch copy keeps `data` at the initial state, as promised.
+    states, _ = rollout.rollout(model, mujoco.MjData(model), state0[None], nstep=nstep, **kwargs)
     states = np.concatenate([state0[None], states[0]])
     return split_states(model, states)
 
@@ -117,3 +118,89 @@ def divergence_time(time: np.ndarray, qpos: np.ndarray, qvel: np.ndarray) -> flo
         return None
     first = int(np.argmax(bad))
     return float(time[max(first - 1, 0)])
+
+
+def initial_states(model: mujoco.MjModel, data: mujoco.MjData, qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
+    """Full-physics states for a batch: the state in `data` with qpos and qvel replaced row by row.
+
+    Parameters
+    ----------
+    qpos : ndarray, shape (nbatch, nq)
+    qvel : ndarray, shape (nbatch, nv)
+
+    Returns
+    -------
+    ndarray, shape (nbatch, mj_stateSize(model, mjSTATE_FULLPHYSICS))
+    """
+    qpos = np.atleast_2d(qpos)
+    qvel = np.atleast_2d(qvel)
+    states = np.repeat(get_state(model, data)[None], len(qpos), axis=0)
+    states[:, 1 : 1 + model.nq] = qpos
+    states[:, 1 + model.nq : 1 + model.nq + model.nv] = qvel
+    return states
+
+
+def final_states(
+    model: mujoco.MjModel | list[mujoco.MjModel],
+    states0: np.ndarray,
+    nstep: int,
+    *,
+    nthread: int | None = None,
+    chunk: int = 1024,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Step many independent initial states `nstep` times each, in C (threaded), keeping only the last state.
+
+    Batch work for Monte Carlo (DESIGN.md "Where speed comes from"): `mujoco.rollout` with one MjData per
+    thread. Rollout records every step, so the batch runs in chunks of `chunk` states to bound the memory
+    (chunk x nstep x nstate doubles). The result does not depend on `nthread` or `chunk`: each state is
+    stepped on its own from a fresh copy of its initial state.
+
+    Parameters
+    ----------
+    model : MjModel, or a list of one MjModel per state (same sizes, e.g. different contact stiffness)
+    states0 : ndarray, shape (nbatch, nstate)
+        Full-physics initial states (`initial_states`).
+    nstep : int
+        Steps per state, >= 1.
+    nthread : int, optional
+        Threads (default: the number of CPUs).
+    chunk : int
+        States per rollout call.
+
+    Returns
+    -------
+    states : ndarray, shape (nbatch, nstate)
+        The state after `nstep` steps.
+    diverged : ndarray of bool, shape (nbatch,)
+        True where the state went non-finite or MuJoCo reset it (time did not reach nstep * timestep).
+
+    Raises
+    ------
+    ValueError
+        If nstep < 1 or nstep > MAX_STEPS, or the shapes do not match.
+    """
+    import os
+
+    if not 1 <= nstep <= MAX_STEPS:
+        raise ValueError(f"nstep = {nstep} is outside [1, {MAX_STEPS}]")
+    states0 = np.atleast_2d(np.asarray(states0, dtype=float))
+    models = model if isinstance(model, list) else None
+    base = models[0] if models else model
+    if states0.shape[1] != mujoco.mj_stateSize(base, STATE):
+        raise ValueError(f"states0 has {states0.shape[1]} columns, expected {mujoco.mj_stateSize(base, STATE)}")
+    if models is not None and len(models) != len(states0):
+        raise ValueError(f"{len(models)} models for {len(states0)} states")
+    nthread = (os.cpu_count() or 1) if nthread is None else int(nthread)
+    datas = [mujoco.MjData(base) for _ in range(max(nthread, 1))]
+    out = np.empty_like(states0)
+    for lo in range(0, len(states0), chunk):
+        hi = min(lo + chunk, len(states0))
+        m = models[lo:hi] if models is not None else base
+        states, _ = rollout.rollout(m, datas, states0[lo:hi], nstep=nstep)
+        out[lo:hi] = states[:, -1]
+    qpos = out[:, 1 : 1 + base.nq]
+    qvel = out[:, 1 + base.nq : 1 + base.nq + base.nv]
+    t_end = states0[:, 0] + nstep * base.opt.timestep
+    diverged = ~(np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1))
+    diverged |= ~np.isclose(out[:, 0], t_end, rtol=1e-9, atol=0.5 * base.opt.timestep)
+    return out, diverged
