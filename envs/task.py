@@ -87,6 +87,10 @@ class TaskEnv(ScenarioEnv):
         """The theory's action for the current state and target (in the action space)."""
         raise NotImplementedError
 
+    def theory_actions(self) -> list[np.ndarray]:
+        """Every action the theory finds optimal (where the optimum is not unique); `theory_action` is one."""
+        return [self.theory_action()]
+
     def _advance(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
         """Apply `action` and simulate; return the reward terms and the outcome for ``info``.
 

@@ -3,9 +3,10 @@
 The cross-entropy method (numpy only) searches the normalised action box [-1, 1]^n of ``CueShot-v0`` and
 ``ScatterToAngle-v0`` for a fixed target: sample a Gaussian population, keep the best fraction by simulated
 reward, refit the mean and spread, repeat. It knows nothing of the physics; the theory does: the script prints
-the distance from the optimiser's final mean to ``env.unwrapped.theory_action()`` (B1/B2 for the cue: strike at
-2R/5 above the centre with v0 = the target speed; C2/C3 for the spheres: the impact parameter whose LAB angle is
-the target, or the critical one b0 when the target exceeds the maximum LAB angle).
+the distance from the optimiser's final mean to the nearest of ``env.unwrapped.theory_actions()`` (B1/B2 for the
+cue: strike at 2R/5 above the centre with v0 = the target speed; C2/C3 for the spheres: an impact parameter
+whose LAB angle is the target, on either branch, or the critical one b0 when the target exceeds the maximum LAB
+angle).
 
 Usage: ``python examples/cem_shots.py [--iterations 12] [--population 24] [--seed 0]``
 """
@@ -78,7 +79,8 @@ def cross_entropy_search(
         mean = elite.mean(axis=0)
         std = elite.std(axis=0) + 1e-3 * (high - low)  # a floor keeps the search from freezing early
     env.reset(options={"target": target})
-    theory = env.theory_action()
+    # The optimum nearest to where the search ended (a heavy projectile reaches an angle on two branches).
+    theory = min(env.theory_actions(), key=lambda a: float(np.linalg.norm(a - mean)))
     result = Search(mean, reward(mean), theory, reward(theory), evaluations + 2)
     env.close()
     return result

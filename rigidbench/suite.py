@@ -171,6 +171,8 @@ def load(
     if "/" in scenario:
         return _load_task(scenario, task, params, profile_name, task_kwargs, environment_kwargs)
     sc = registry.get(scenario)
+    if sc.env_id is None:
+        raise ValueError(f"scenario '{scenario}' has no stepping environment (a batch scenario): no dm_control view")
     env = gym.make(sc.env_id, case=task, params=params, profile=profile_name).unwrapped
     model = sc.build(sc.resolve(sc.case(task), params), _profile(profile_name))
     physics = Physics.from_model(dm_mujoco.wrapper.MjModel(model))
