@@ -7,7 +7,6 @@ percussion closed forms of `rigidbench.analytic.percussion` (P1, P2, P5).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -89,9 +88,6 @@ class PercussionStrikeEnv(ShotTask):
     offset_range: ClassVar[tuple[float, float]] = (1 / 12, 1 / 2)  # fractions of L
     impulse_range: ClassVar[tuple[float, float]] = (0.2, 2.0)  # N s
     target_range: ClassVar[tuple[float, float]] = (5.0, 20.0)  # m/s
-
-    def __init__(self, *, params: Mapping[str, Any] | None = None, **kwargs: Any) -> None:
-        super().__init__(params=params, **kwargs)
 
     def _action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float64)

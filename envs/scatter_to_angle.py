@@ -7,7 +7,6 @@ initial state (projectile aimed at impact parameter b), its measurement of the o
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -72,9 +71,6 @@ class ScatterToAngleEnv(ShotTask):
     # Impact parameters reachable by the action, as a fraction of a = r1 + r2 (0.98: short of a grazing miss).
     max_impact: ClassVar[float] = 0.98
     largest_target: ClassVar[float] = 0.6  # rad
-
-    def __init__(self, *, params: Mapping[str, Any] | None = None, **kwargs: Any) -> None:
-        super().__init__(params=params, **kwargs)
 
     def _action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float64)
