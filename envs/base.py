@@ -132,18 +132,7 @@ class ScenarioEnv(gym.Env):
         return obs, info
 
     def step(self, action):
-        if not (type(action) is np.ndarray and action.dtype == np.float64):
-            action = np.asarray(action, dtype=np.float64)
-        if action.shape != self.action_space.shape:
-            raise ValueError(f"action shape {action.shape} != {self.action_space.shape}")
-        # Fast path: every component inside [low, high] (NaN fails the comparison and takes the slow path).
-        inside = zip(self._action_low, action.tolist(), self._action_high, strict=True)
-        if not all(lo <= v <= hi for lo, v, hi in inside):
-            if not np.isfinite(action).all():
-                raise ValueError(f"action {action} is not finite")
-            # Out-of-range actions are clipped to the action space (gymnasium's MuJoCo convention).
-            action = np.clip(action, self.action_space.low, self.action_space.high)
-        self._apply_action(action)
+        self._apply_action(self._checked_action(action))
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
         self._k += 1
         obs = self._observation()
@@ -157,6 +146,27 @@ class ScenarioEnv(gym.Env):
         info = self._step_info(obs, self._k)
         truncated = self.data.time >= self.episode_duration - 0.5 * self.model.opt.timestep
         return obs, info["reward_deviation"], False, bool(truncated), info
+
+    def _checked_action(self, action) -> np.ndarray:
+        """`action` as float64 of the action space's shape, clipped to it.
+
+        Raises
+        ------
+        ValueError
+            If the shape is wrong or a component is not finite.
+        """
+        if not (type(action) is np.ndarray and action.dtype == np.float64):
+            action = np.asarray(action, dtype=np.float64)
+        if action.shape != self.action_space.shape:
+            raise ValueError(f"action shape {action.shape} != {self.action_space.shape}")
+        # Fast path: every component inside [low, high] (NaN fails the comparison and takes the slow path).
+        inside = zip(self._action_low, action.tolist(), self._action_high, strict=True)
+        if not all(lo <= v <= hi for lo, v, hi in inside):
+            if not np.isfinite(action).all():
+                raise ValueError(f"action {action} is not finite")
+            # Out-of-range actions are clipped to the action space (gymnasium's MuJoCo convention).
+            action = np.clip(action, self.action_space.low, self.action_space.high)
+        return action
 
     def render(self):
         if self.render_mode != "rgb_array":

@@ -140,10 +140,12 @@ class RotorEnv(ScenarioEnv):
         super()._load(case, params)
         adr = int(self.model.jnt_qposadr[0]) + (3 if self.model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE else 0)
         self._quat = slice(adr, adr + 4)
-        self._torque = self.data.xfrc_applied[self.model.body(self.body).id, 3:6]  # a view
+        self._body_id = self.model.body(self.body).id
 
     def _apply_action(self, action: np.ndarray) -> None:
-        self._torque[:] = action
+        # Through `self.data` at every call, not a cached view: the dm_control view and the task envs' theory
+        # rollouts rebind `data` to another MjData.
+        self.data.xfrc_applied[self._body_id, 3:6] = action
 
 
 class FreeRotorEnv(RotorEnv):
