@@ -15,43 +15,23 @@ from rigidbench.analytic import oscillations as osc
 from rigidbench.envs import pendulums
 from rigidbench.envs.coupled_pendulums import transfer_time
 from rigidbench.envs.double_pendulum import absolute
-from rigidbench.plots import Figure, PlotContext, plot
-
-THEORY = {"color": "k", "lw": 1.0}
-
-
-def _ok(run) -> bool:
-    return run.trajectory is not None and run.diverged_at is None
-
-
-def _try_run(ctx: PlotContext, case: str, overrides: dict | None = None):
-    """The case's run, or None if its parameters or these settings are refused (ValueError) or it diverged."""
-    try:
-        run = ctx.run(case, overrides)
-    except ValueError:
-        return None
-    return run if _ok(run) else None
-
-
-def _settings_text(run) -> str:
-    s = run.settings
-    return f"{s['integrator']}, dt = {s['timestep']:g} s, mujoco {s['mujoco']}"
-
-
-def _measured(run, check: str) -> float:
-    return next((o.measured for o in run.outcomes if o.check.name == check), float("nan"))
-
-
-def _thin(n: int, target: int = 400) -> slice:
-    return slice(None, None, max(1, n // target))
-
+from rigidbench.plots import (
+    THEORY_STYLE,
+    Figure,
+    PlotContext,
+    measured_value,
+    plot,
+    settings_text,
+    thin,
+    try_run,
+)
 
 # ---- the pendulum (O1, O2) -------------------------------------------------------------------------------------
 
 
 @plot("pendulum")
 def pendulum(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     figures = []
@@ -60,29 +40,29 @@ def pendulum(ctx: PlotContext) -> list[Figure]:
     t0 = osc.small_amplitude_period(length_eq, g)
     extra = []
     for amplitude in (0.5, 1.5, 2.0, 2.8):
-        if (run := _try_run(ctx, "one-radian", {"amplitude": amplitude})) is not None:
+        if (run := try_run(ctx, "one-radian", {"amplitude": amplitude})) is not None:
             extra.append(run)
     a = np.linspace(1e-3, 3.1, 400)
     exact = np.array([osc.pendulum_period(length_eq, g, x) for x in a])
     series = np.array([osc.pendulum_period_series(length_eq, g, x) for x in a])
     fig, (ax, res) = ctx.subplots(2, 1, sharex=True, height_ratios=(3, 1.6), figsize=(8.0, 5.8))
-    ax.plot(a, exact / t0, label="exact (O1): 4 sqrt(l/g) K(sin(a/2))", **THEORY)
+    ax.plot(a, exact / t0, label="exact (O1): 4 sqrt(l/g) K(sin(a/2))", **THEORY_STYLE)
     ax.plot(a, series / t0, color="C1", lw=1.0, ls="--", label="series: 1 + a^2/16 + 11 a^4/3072")
     res.semilogy(a, np.abs(series / exact - 1), color="C1", lw=1.0, ls="--", label="series vs exact")
     for i, (case, run) in enumerate(runs):
-        x, period = run.params["amplitude"], _measured(run, "period")
+        x, period = run.params["amplitude"], measured_value(run, "period")
         expected = osc.pendulum_period(length_eq, g, x)
         ax.plot(x, period / t0, "o", color=f"C{i + 2}", ms=8, mec="k", label=f"MuJoCo: {case}")
         res.semilogy(x, max(abs(period / expected - 1), 1e-16), "o", color=f"C{i + 2}", ms=7, mec="k")
     for j, run in enumerate(extra):
-        x, period = run.params["amplitude"], _measured(run, "period")
+        x, period = run.params["amplitude"], measured_value(run, "period")
         expected = osc.pendulum_period(length_eq, g, x)
         ax.plot(x, period / t0, "s", color="0.35", ms=5, label="MuJoCo: more amplitudes" if j == 0 else None)
         res.semilogy(x, max(abs(period / expected - 1), 1e-16), "s", color="0.35", ms=5)
     tol = ctx.scenario.check("period").tolerance
     res.axhline(tol, color="C3", lw=0.8, ls=":", label=f"tolerance {tol:g}")
     ax.set_ylabel("period T / T0,  T0 = 2 pi sqrt(l/g)")
-    ax.set_title(f"pendulum: period against amplitude ({_settings_text(runs[0][1])})", fontsize=10)
+    ax.set_title(f"pendulum: period against amplitude ({settings_text(runs[0][1])})", fontsize=10)
     ax.legend(fontsize=7.5, loc="upper left")
     res.set_ylabel("|T / T_exact - 1|")
     res.set_xlabel("amplitude a (rad), released from rest")
@@ -114,7 +94,7 @@ def pendulum(ctx: PlotContext) -> list[Figure]:
             small = pred["_amplitude"] * np.cos(2 * np.pi * t / t0)
             ax.plot(t, small, color="0.6", lw=0.8, ls=":", label="small-angle: a cos(2 pi t / T0)")
             ax.plot(t, theta, color="C3", lw=3.0, alpha=0.5, label="MuJoCo")
-            ax.plot(t, theory, label="exact (O1): 2 arcsin(k cd(omega0 t, k))", **THEORY)
+            ax.plot(t, theory, label="exact (O1): 2 arcsin(k cd(omega0 t, k))", **THEORY_STYLE)
             ax.set_title(f"{case}: a = {pred['_amplitude']:g} rad, T = {pred['period'] / t0:.3f} T0", fontsize=9)
             res.plot(t, theta - theory, color="C3", lw=0.8)
             res.set_xlabel("t (s)")
@@ -144,7 +124,7 @@ def pendulum(ctx: PlotContext) -> list[Figure]:
 def coupled_pendulums(ctx: PlotContext) -> list[Figure]:
     figures = []
     for case in ("beats", "weak-coupling"):
-        run = _try_run(ctx, case)
+        run = try_run(ctx, case)
         if run is None:
             continue
         traj, pred = run.trajectory, run.prediction
@@ -181,7 +161,7 @@ def coupled_pendulums(ctx: PlotContext) -> list[Figure]:
         )
         axes[0].set_title(
             f"coupled-pendulums:{case}: w_s = {beats.omega_s:.5g}, w_a = {beats.omega_a:.5g} rad/s, "
-            f"A = {amp:g} rad ({_settings_text(run)})",
+            f"A = {amp:g} rad ({settings_text(run)})",
             fontsize=9,
         )
         res = axes[2]
@@ -219,7 +199,7 @@ def _chain_omegas(run) -> np.ndarray:
 
 @plot("pendulum-chain")
 def pendulum_chain(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     figures = []
@@ -260,7 +240,7 @@ def pendulum_chain(ctx: PlotContext) -> list[Figure]:
     res.axhline(tol, color="C3", lw=0.8, ls=":", label=f"tolerance {tol:g}")
     n = len(runs[0][1].prediction["_omega_O7"])
     ax.set_ylabel("mode frequency w_r (rad/s)")
-    ax.set_title(f"pendulum-chain: the N = {n} normal modes ({_settings_text(runs[0][1])})", fontsize=10)
+    ax.set_title(f"pendulum-chain: the N = {n} normal modes ({settings_text(runs[0][1])})", fontsize=10)
     ax.legend(fontsize=7.5, loc="upper left")
     res.set_ylabel("|w_sim / w_theory - 1|")
     res.set_xlabel("mode number r (r = 0: all in phase)")
@@ -294,7 +274,7 @@ def pendulum_chain(ctx: PlotContext) -> list[Figure]:
             shape = shape / np.abs(shape).max()
             theory = np.cos(r * np.pi * (jj + 0.5) / n)
             sign = np.sign(np.cos(r * np.pi * 0.5 / n))  # the fitted shape is normalised to th_1 > 0
-            ax.plot(jj + 1, sign * theory / np.abs(np.cos(r * np.pi * (j + 0.5) / n)).max(), **THEORY)
+            ax.plot(jj + 1, sign * theory / np.abs(np.cos(r * np.pi * (j + 0.5) / n)).max(), **THEORY_STYLE)
             ax.plot(j + 1, shape, "o", color="C3", ms=7, mec="k")
             ax.axhline(0, color="0.7", lw=0.6)
             ax.set_title(f"r = {r}: w = {sim[r]:.4g} rad/s", fontsize=8.5)
@@ -319,7 +299,7 @@ def pendulum_chain(ctx: PlotContext) -> list[Figure]:
 
 @plot("double-pendulum")
 def double_pendulum(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     figures = []
@@ -368,7 +348,7 @@ def double_pendulum(ctx: PlotContext) -> list[Figure]:
             theory = q0 * np.cos(modes.frequencies * t[:, None])
             window = t <= 3 * 2 * np.pi / modes.frequencies[0]
             res = axes[2, col]
-            k = _thin(len(t), 3000)
+            k = thin(len(t), 3000)
             for r, (name, color) in enumerate((("slow", "C0"), ("fast", "C1"))):
                 ax = axes[r, col]
                 ax.plot(t[window], q[window, r] / q0[r], color=color, lw=3.0, alpha=0.5, label=f"MuJoCo q_{name}")

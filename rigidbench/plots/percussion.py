@@ -15,25 +15,21 @@ from rigidbench import signals
 from rigidbench.analytic import percussion
 from rigidbench.envs.cue_strike import CueStrike
 from rigidbench.envs.planar import free_body_motion
-from rigidbench.plots import Figure, PlotContext, plot, pyplot
+from rigidbench.plots import (
+    THEORY_STYLE,
+    Figure,
+    PlotContext,
+    measured_value,
+    plot,
+    pyplot,
+    settings_text,
+    simulated,
+    thin,
+    try_run,
+)
 from rigidbench.settings import profile
 
 SIM = {"lw": 0, "marker": "o", "ms": 3.0, "alpha": 0.85}
-THEORY = {"color": "k", "lw": 1.0}
-
-
-def _ok(run) -> bool:
-    return run.trajectory is not None and run.diverged_at is None
-
-
-def _settings_text(run) -> str:
-    s = run.settings
-    return f"{s['integrator']}, dt = {s['timestep']:g} s, mujoco {s['mujoco']}"
-
-
-def _measured(run, check: str) -> float:
-    """The measured value of a check in a run (NaN if the run did not score it)."""
-    return next((o.measured for o in run.outcomes if o.check.name == check), float("nan"))
 
 
 def _expected(run, check: str) -> float:
@@ -45,25 +41,12 @@ def _clean(x: float, scale: float) -> float:
     return 0.0 if abs(x) <= 1e-12 * abs(scale) else x
 
 
-def _thin(n: int, target: int = 400) -> slice:
-    return slice(None, None, max(1, n // target))
-
-
-def _try_run(ctx: PlotContext, case: str, overrides: dict | None = None):
-    """The case's run, or None if its parameters or these settings are refused (ValueError) or it diverged."""
-    try:
-        run = ctx.run(case, overrides)
-    except ValueError:
-        return None
-    return run if _ok(run) else None
-
-
 # ---- struck stick: the centre of percussion's cycloid (P1-P3) -------------------------------------------------
 
 
 @plot("struck-stick")
 def struck_stick(ctx: PlotContext) -> list[Figure]:
-    cases = [c for c in ("quarter", "end", "near-centre") if _try_run(ctx, c) is not None]
+    cases = [c for c in ("quarter", "end", "near-centre") if try_run(ctx, c) is not None]
     if not cases:
         return []
     fig, axes = ctx.subplots(len(cases), 1, figsize=(9.0, 2.5 * len(cases) + 0.6), squeeze=False)
@@ -80,19 +63,21 @@ def struck_stick(ctx: PlotContext) -> list[Figure]:
         tp = np.maximum(t - tau / 2, 0.0)  # the pulse acts as an impulse at its centroid
         dense = np.linspace(0.0, tp[-1], 2000)
         ideal = theory.cycloid(dense)
-        ax.plot(ideal[:, 0], ideal[:, 1], label="theory: cycloid x = p(th - sin th), y = -p cos th (P3)", **THEORY)
+        ax.plot(
+            ideal[:, 0], ideal[:, 1], label="theory: cycloid x = p(th - sin th), y = -p cos th (P3)", **THEORY_STYLE
+        )
         # Snapshots of the stick (grey), extended (dotted) to the centre of percussion when it lies off the stick.
         near, far = m.point_W(np.array([0.0, -length / 2, 0.0])), m.point_W(np.array([0.0, length / 2, 0.0]))
         for i in np.linspace(0, len(t) - 1, 7).astype(int):
             ax.plot([near[i, 0], far[i, 0]], [near[i, 1], far[i, 1]], color="0.6", lw=2.0, zorder=1)
             if p > length / 2:
                 ax.plot([near[i, 0], cop[i, 0]], [near[i, 1], cop[i, 1]], color="0.7", lw=0.8, ls=":", zorder=1)
-        k = _thin(len(t), 120)
+        k = thin(len(t), 120)
         ax.plot(
             cop[k, 0],
             cop[k, 1],
             color="C3",
-            label=f"MuJoCo: body point s = -p ({_settings_text(run)})",
+            label=f"MuJoCo: body point s = -p ({settings_text(run)})",
             **{**SIM, "ms": 2.5},
         )
         n = np.arange(0, int(tp[-1] / theory.cusp_period) + 1)
@@ -159,7 +144,7 @@ def _slip_panel(ctx: PlotContext, ax, res, cases, label) -> list[tuple[str, floa
     """Slip(t) of each case over B2's straight line, t_r marked; difference underneath. Returns what was drawn."""
     drawn = []
     for i, case in enumerate(cases):
-        run = _try_run(ctx, case)
+        run = try_run(ctx, case)
         if run is None:
             continue
         model = ctx.model(case)
@@ -208,7 +193,7 @@ def _lift_panel(ctx: PlotContext, ax, settings, title: str) -> float | None:
     top, curves = 0.0, []
     for i, case in enumerate(c.name for c in ctx.scenario.cases):
         if settings is None:
-            run = _try_run(ctx, case)
+            run = try_run(ctx, case)
             if run is None:
                 continue
             model = ctx.model(case)
@@ -218,7 +203,7 @@ def _lift_panel(ctx: PlotContext, ax, settings, title: str) -> float | None:
                 model = ctx.scenario.build(ctx.scenario.resolve(ctx.scenario.case(case)), settings)
             except ValueError:
                 continue
-        if not _ok(run):
+        if not simulated(run):
             continue
         m = free_body_motion(model, run.trajectory, "ball")
         radius = run.prediction["_theory"].radius
@@ -249,7 +234,7 @@ def cue_strike(ctx: PlotContext) -> list[Figure]:
     drawn = _slip_panel(ctx, ax, res, [c.name for c in ctx.scenario.cases], label)
     if drawn:
         run0 = ctx.run(drawn[0][0])
-        ax.set_title(f"cue-strike: slip of the contact point, skid to rolling ({_settings_text(run0)})", fontsize=10)
+        ax.set_title(f"cue-strike: slip of the contact point, skid to rolling ({settings_text(run0)})", fontsize=10)
         figures.append(
             Figure(
                 "Cue ball: contact-point slip to rolling",
@@ -295,7 +280,7 @@ def cue_strike(ctx: PlotContext) -> list[Figure]:
 
 @plot("cushion-rebound")
 def cushion_rebound(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     model = ctx.model(runs[0][0])
@@ -311,14 +296,14 @@ def cushion_rebound(ctx: PlotContext) -> list[Figure]:
     ax, sl, res = axd["H"], axd["u"], axd["r"]
     sl.sharex(res)
     H = np.linspace(0.02, 1.98, 200) * radius
-    ax.plot(H / (2 * radius), rebound_slip(H), label="theory (B1): (1 + e) v (5 (H - R)/(2R) - 1)", **THEORY)
+    ax.plot(H / (2 * radius), rebound_slip(H), label="theory (B1): (1 + e) v (5 (H - R)/(2R) - 1)", **THEORY_STYLE)
     ax.axvline(0.7, color="0.5", ls=":", lw=0.8)
     ax.text(0.7, rebound_slip(0.1 * radius), " H = 7/10 of the diameter", fontsize=8)
     ax.axhline(0.0, color="0.6", lw=0.6)
     for i, (case, run) in enumerate(runs):
         ax.plot(
             run.params["cushion_height"] / (2 * radius),
-            _measured(run, "rebound-slip"),
+            measured_value(run, "rebound-slip"),
             "o",
             color=f"C{i}",
             ms=8,
@@ -327,9 +312,9 @@ def cushion_rebound(ctx: PlotContext) -> list[Figure]:
         )
     extra = []
     for frac in (0.15, 0.3, 0.45, 0.55, 0.65, 0.75, 0.9):
-        run = _try_run(ctx, "low", {"cushion_height": 2 * frac * radius})
+        run = try_run(ctx, "low", {"cushion_height": 2 * frac * radius})
         if run is not None:
-            extra.append((frac, _measured(run, "rebound-slip")))
+            extra.append((frac, measured_value(run, "rebound-slip")))
     if extra:
         ax.plot(*np.array(extra).T, "s", color="0.35", ms=5, label="MuJoCo: more cushion heights")
     ax.set_xlabel("cushion nose height H / (2R)")
@@ -364,7 +349,7 @@ def cushion_rebound(ctx: PlotContext) -> list[Figure]:
 
 @plot("pivoted-stick")
 def pivoted_stick(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     length = runs[0][1].params["length"]
@@ -375,7 +360,7 @@ def pivoted_stick(ctx: PlotContext) -> list[Figure]:
     sweet = percussion.sweet_spot(mass, inertia_pivot, d_cm)
     points = list(runs)
     for frac in (0.1, 0.4, 0.55, 0.8, 0.9):
-        run = _try_run(ctx, "end", {"strike": frac * length})
+        run = try_run(ctx, "end", {"strike": frac * length})
         if run is not None:
             points.append((None, run))
     fig, (ax, res) = ctx.subplots(2, 1, sharex=True, height_ratios=(3, 1.2), figsize=(8.0, 5.6))
@@ -384,14 +369,14 @@ def pivoted_stick(ctx: PlotContext) -> list[Figure]:
         d / length,
         percussion.pivot_reaction_impulse(mass, inertia_pivot, d_cm, d, 1.0),
         label="theory (P4): J / Pi = M d_cm d / I_O - 1",
-        **THEORY,
+        **THEORY_STYLE,
     )
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.axvline(sweet / length, color="0.5", ls=":", lw=0.8)
     ax.text(sweet / length, -0.9, f" sweet spot d* = I_O/(M d_cm) = {sweet / length:.4g} L", fontsize=8)
     for i, (case, run) in enumerate(points):
         x = run.params["strike"] / length
-        y, expected = _measured(run, "reaction-impulse"), _expected(run, "reaction-impulse")
+        y, expected = measured_value(run, "reaction-impulse"), _expected(run, "reaction-impulse")
         if case is not None:
             ax.plot(x, y, "o", color=f"C{i}", ms=8, mec="k", label=f"MuJoCo: {case}")
             res.plot(x, y - expected, "o", color=f"C{i}", ms=6, mec="k")
@@ -400,7 +385,7 @@ def pivoted_stick(ctx: PlotContext) -> list[Figure]:
             res.plot(x, y - expected, "s", color="0.35", ms=4)
     tol = ctx.scenario.check("reaction-impulse").tolerance
     res.axhspan(-tol, tol, color="C2", alpha=0.15, label=f"tolerance +-{tol:g}")
-    diffs = [abs(_measured(r, "reaction-impulse") - _expected(r, "reaction-impulse")) for _c, r in points]
+    diffs = [abs(measured_value(r, "reaction-impulse") - _expected(r, "reaction-impulse")) for _c, r in points]
     biggest = max((d for d in diffs if np.isfinite(d)), default=tol)
     span = 1.5 * max(biggest, 0.05 * tol)  # the differences all visible, the band where it fits
     res.set_ylim(-span, span)
@@ -410,7 +395,7 @@ def pivoted_stick(ctx: PlotContext) -> list[Figure]:
     res.legend(fontsize=7.5, loc="upper right")
     res.set_xlabel("strike distance from the pivot d / L")
     ax.set_ylabel("pivot reaction impulse J / Pi (along the blow)")
-    ax.set_title(f"pivoted-stick: reaction impulse against strike distance ({_settings_text(runs[0][1])})", fontsize=10)
+    ax.set_title(f"pivoted-stick: reaction impulse against strike distance ({settings_text(runs[0][1])})", fontsize=10)
     ax.legend(fontsize=7.5, loc="upper left")
     return [
         Figure(
@@ -432,7 +417,7 @@ def pivoted_stick(ctx: PlotContext) -> list[Figure]:
 
 @plot("ball-stick")
 def ball_stick(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     p = runs[0][1].params
@@ -441,7 +426,7 @@ def ball_stick(ctx: PlotContext) -> list[Figure]:
     m_eff = 1.0 / (1.0 / mass + offset**2 / inertia)
     points = list(runs)
     for ball_mass in (0.02, 0.05, 0.25, 0.5, 3.0):
-        run = _try_run(ctx, "light-ball", {"ball_mass": ball_mass})
+        run = try_run(ctx, "light-ball", {"ball_mass": ball_mass})
         if run is not None:
             points.append((None, run))
     ms = np.geomspace(0.05 * m_eff, 30 * m_eff, 300)
@@ -462,7 +447,7 @@ def ball_stick(ctx: PlotContext) -> list[Figure]:
         ax.semilogx(ms / m_eff, [curve(th) for th in curves], color=color, lw=1.0, label=f"theory (P5): {name}")
         for case, run in points:
             x = run.params["ball_mass"] / m_eff
-            y = scale(_measured(run, check))
+            y = scale(measured_value(run, check))
             marker = "o" if case is not None else "s"
             ax.plot(x, y, marker, color=color, ms=7 if case else 5, mec="k")
             res.semilogx(x, y - scale(_expected(run, check)), marker, color=color, ms=5 if case else 4, mec="k")
@@ -473,7 +458,7 @@ def ball_stick(ctx: PlotContext) -> list[Figure]:
         x = run.params["ball_mass"] / m_eff
         ax.annotate(
             case,
-            (x, _measured(run, "ball-velocity") / u),
+            (x, measured_value(run, "ball-velocity") / u),
             xytext=(8, -12),
             textcoords="offset points",
             fontsize=7.5,
@@ -512,7 +497,7 @@ def ball_stick(ctx: PlotContext) -> list[Figure]:
 
 @plot("marble-shot")
 def marble_shot(ctx: PlotContext) -> list[Figure]:
-    cases = [c.name for c in ctx.scenario.cases if _try_run(ctx, c.name) is not None]
+    cases = [c.name for c in ctx.scenario.cases if try_run(ctx, c.name) is not None]
     if not cases:
         return []
     fig, axes = ctx.subplots(1, len(cases), figsize=(5.0 * len(cases), 4.2), squeeze=False, sharey=True)
@@ -536,8 +521,8 @@ def marble_shot(ctx: PlotContext) -> list[Figure]:
         ax.set_xscale("log")
         ax.set_xlabel("t (ms) after the start of the blow")
         ax.set_title(
-            f"{case}: h = {run.params['offset']:.3g} m; measured A {_measured(run, 'marble-a-speed'):.4g}, "
-            f"C {_measured(run, 'marble-c-speed'):.4g} m/s",
+            f"{case}: h = {run.params['offset']:.3g} m; measured A {measured_value(run, 'marble-a-speed'):.4g}, "
+            f"C {measured_value(run, 'marble-c-speed'):.4g} m/s",
             fontsize=9,
         )
         ax.legend(fontsize=7.5, loc="upper left")

@@ -13,33 +13,11 @@ import numpy as np
 
 from rigidbench.analytic import scattering
 from rigidbench.envs.hard_spheres import HardSpheres
-from rigidbench.plots import Figure, PlotContext, plot
+from rigidbench.plots import THEORY_STYLE, Figure, PlotContext, measured_value, plot, settings_text, try_run
 
-THEORY = {"color": "k", "lw": 1.0}
 # The deflection function's extra points, b / a, and the cases (mass ratios) that get them.
 EXTRA_B = (0.1, 0.25, 0.4, 0.55, 0.7, 0.85, 0.95)
 RATIOS = (("light-projectile", "m1/m2 = 1/3"), ("equal-mass", "1"), ("heavy-projectile", "3"))
-
-
-def _ok(run) -> bool:
-    return run.trajectory is not None and run.diverged_at is None
-
-
-def _settings_text(run) -> str:
-    s = run.settings
-    return f"{s['integrator']}, dt = {s['timestep']:g} s, mujoco {s['mujoco']}"
-
-
-def _measured(run, check: str) -> float:
-    return next((o.measured for o in run.outcomes if o.check.name == check), float("nan"))
-
-
-def _try_run(ctx: PlotContext, case: str, overrides: dict | None = None):
-    try:
-        run = ctx.run(case, overrides)
-    except ValueError:
-        return None
-    return run if _ok(run) else None
 
 
 # ---- one collision: the deflection function (C2, C5, C8) --------------------------------------------------------
@@ -54,7 +32,7 @@ def _final_angles(ctx: PlotContext, case: str, state: np.ndarray, v0: np.ndarray
 
 @plot("hard-spheres")
 def hard_spheres(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     pred = runs[0][1].prediction
@@ -67,7 +45,7 @@ def hard_spheres(ctx: PlotContext) -> list[Figure]:
         points.setdefault(run.params["m1"] / run.params["m2"], []).append((case, run))
     for case, _color in RATIOS:
         for f in EXTRA_B:
-            if (run := _try_run(ctx, case, {"b": f * a})) is not None:
+            if (run := try_run(ctx, case, {"b": f * a})) is not None:
                 points.setdefault(run.params["m1"] / run.params["m2"], []).append((case, run))
     colors = {x: f"C{i}" for i, x in enumerate(sorted(points))}
     b = np.linspace(0.0, 0.9999, 600) * a
@@ -75,7 +53,7 @@ def hard_spheres(ctx: PlotContext) -> list[Figure]:
     figures = []
 
     fig, (ax, res) = ctx.subplots(2, 1, sharex=True, height_ratios=(2.2, 2), figsize=(8.0, 6.2))
-    ax.plot(b / a, hard, label="hard spheres (C5): theta = 2 arccos(b/a)", **THEORY)
+    ax.plot(b / a, hard, label="hard spheres (C5): theta = 2 arccos(b/a)", **THEORY_STYLE)
     if elastic:
         soft = scattering.soft_sphere_cm_angle(b, a, k, speed)
         ax.plot(b / a, soft, color="C3", lw=1.0, ls="--", label=f"soft contact (C8), k = {k:.3g} 1/s^2")
@@ -94,7 +72,7 @@ def hard_spheres(ctx: PlotContext) -> list[Figure]:
     for group in points.values():
         for case, run in group:
             bb = run.prediction["_b"] / a
-            theta = _measured(run, "cm-angle")
+            theta = measured_value(run, "cm-angle")
             ax.plot(bb, theta, "o", color="C3", ms=5, mec="k", label="MuJoCo" if first else None)
             res.plot(
                 bb,
@@ -120,7 +98,7 @@ def hard_spheres(ctx: PlotContext) -> list[Figure]:
             first = False
     ax.set_ylabel("CM scattering angle theta (rad)")
     ax.set_title(
-        f"hard-spheres: deflection function, a = r1 + r2 = {a:g} m, u = {speed:g} m/s ({_settings_text(runs[0][1])})",
+        f"hard-spheres: deflection function, a = r1 + r2 = {a:g} m, u = {speed:g} m/s ({settings_text(runs[0][1])})",
         fontsize=9,
     )
     ax.legend(fontsize=8, loc="upper right")
@@ -145,7 +123,7 @@ def hard_spheres(ctx: PlotContext) -> list[Figure]:
 
     fig, (ax, az) = ctx.subplots(1, 2, figsize=(10.5, 4.4))
     psi, zeta = scattering.lab_angles(hard, 1.0)
-    az.plot(b / a, zeta, label="C2 + C5: zeta = arcsin(b/a), any m1/m2", **THEORY)
+    az.plot(b / a, zeta, label="C2 + C5: zeta = arcsin(b/a), any m1/m2", **THEORY_STYLE)
     for x, group in sorted(points.items()):
         color = colors[x]
         psi, _ = scattering.lab_angles(hard, x)
@@ -154,7 +132,7 @@ def hard_spheres(ctx: PlotContext) -> list[Figure]:
             bb = run.prediction["_b"] / a
             ax.plot(
                 bb,
-                _measured(run, "projectile-lab-angle"),
+                measured_value(run, "projectile-lab-angle"),
                 "o",
                 color=color,
                 ms=5,
@@ -163,7 +141,7 @@ def hard_spheres(ctx: PlotContext) -> list[Figure]:
             )
             az.plot(
                 bb,
-                _measured(run, "target-lab-angle"),
+                measured_value(run, "target-lab-angle"),
                 "o",
                 color=color,
                 ms=5,
@@ -221,7 +199,7 @@ def _histogram(samples: np.ndarray, edges: np.ndarray, n: int, beam_area: float)
 
 @plot("cross-section")
 def cross_section(ctx: PlotContext) -> list[Figure]:
-    runs = [(c.name, r) for c in ctx.scenario.cases if (r := _try_run(ctx, c.name)) is not None]
+    runs = [(c.name, r) for c in ctx.scenario.cases if (r := try_run(ctx, c.name)) is not None]
     if not runs:
         return []
     fig, axes = ctx.subplots(len(runs), 3, figsize=(12.0, 3.1 * len(runs) + 0.4), squeeze=False)
@@ -234,7 +212,7 @@ def cross_section(ctx: PlotContext) -> list[Figure]:
         beam = run.trajectory
         angles = HardSpheres().outgoing(model, beam.qpos, beam.qvel, np.array([1.0, 0.0, 0.0]))
         hit = np.linalg.norm(angles["v2"], axis=1) > 0
-        sigma = _measured(run, "total-cross-section")
+        sigma = measured_value(run, "total-cross-section")
         psi_top = scattering.max_lab_angle(x) if x > 1 else (np.pi / 2 if x == 1 else np.pi)
         panels = (
             (
@@ -267,7 +245,7 @@ def cross_section(ctx: PlotContext) -> list[Figure]:
             value, err = _histogram(angles[key][hit], edges, n, beam_area)
             mid = 0.5 * (edges[1:] + edges[:-1])
             fine = np.linspace(edges[0], edges[-1], 400)[1:-1]
-            ax.plot(fine, curve(fine) * 1e4, label=label, **THEORY)
+            ax.plot(fine, curve(fine) * 1e4, label=label, **THEORY_STYLE)
             avg = None
             if key != "theta":  # bin averages of the theory: what a histogram estimates (matters near psi_max)
                 particle = "projectile" if key == "psi" else "target"
@@ -289,7 +267,7 @@ def cross_section(ctx: PlotContext) -> list[Figure]:
             reference = avg if key != "theta" else np.array([a * a / 4])
             top = np.nanmax(np.concatenate([value + err, reference])) * 1e4
             ax.set_ylim(0, 1.35 * top)
-            ax.set_title(f"{case} (m1/m2 = {x:.3g}): chi-square p = {_measured(run, check):.2f}", fontsize=8.5)
+            ax.set_title(f"{case} (m1/m2 = {x:.3g}): chi-square p = {measured_value(run, check):.2f}", fontsize=8.5)
             ax.legend(fontsize=6.5, loc="upper right")
         axes[row, 0].set_ylabel("dsigma/dOmega (cm^2/sr)")
         axes[row, 0].text(
