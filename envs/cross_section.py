@@ -24,6 +24,7 @@ import mujoco
 import numpy as np
 from scipy import stats
 
+from rigidbench import contact
 from rigidbench.analytic import scattering
 from rigidbench.envs.hard_spheres import HardSpheres
 from rigidbench.params import BodyMass, ContactStiffness, GeomSize, Numeric, Param, Range, positive
@@ -131,8 +132,15 @@ class CrossSection(Scenario):
             positive(1e18),
             ContactStiffness(("projectile", "target")),
         ),
-        Param("n", "1", "number of collisions in the beam (integer)", Range(100, 1e7), Numeric("samples")),
-        Param("seed", "1", "seed of the numpy Generator drawing the impact points", Range(0, 2**63), Numeric("seed")),
+        Param("n", "1", "number of collisions in the beam", Range(100, 1e7), Numeric("samples"), integer=True),
+        Param(
+            "seed",
+            "1",
+            "seed of the numpy Generator drawing the impact points",
+            Range(0, 2**53),
+            Numeric("seed"),
+            integer=True,
+        ),
         Param(
             "margin",
             "1",
@@ -154,17 +162,13 @@ class CrossSection(Scenario):
     checks = CHECKS
 
     def validate(self, params: Mapping[str, Any]) -> None:
-        for name in ("n", "seed"):
-            if params[name] != int(params[name]):
-                raise ValueError(f"parameter '{name}' = {params[name]:g} is not an integer")
-        a = params["r1"] + params["r2"]
-        depth = params["speed"] / np.sqrt(params["stiffness"])
-        if not depth <= 0.01 * a:
-            raise ValueError(
-                f"parameter 'stiffness' = {params['stiffness']:g} 1/s^2 lets the spheres overlap by "
-                f"speed/sqrt(k) = {depth:.3g} m, more than 1 % of r1 + r2 = {a:g} m (the histograms compare with "
-                f"hard spheres): use stiffness >= {(params['speed'] / (0.01 * a)) ** 2:.3g} 1/s^2"
-            )
+        contact.require_overlap_at_most(
+            params["speed"],
+            params["stiffness"],
+            params["r1"] + params["r2"],
+            0.01,
+            "the histograms compare with hard spheres",
+        )
 
     def check_model(self, model: mujoco.MjModel) -> None:
         HardSpheres().check_model(model)

@@ -148,6 +148,12 @@ def settle(model: mujoco.MjModel, data: mujoco.MjData) -> None:
     data.time = 0.0
 
 
+BALL_RADIUS = Param(
+    "radius", "m", "radius R of the solid ball (I = 2/5 M R^2)", Range(1e-3, 1.0), SphereRadius("ball", "ball")
+)
+BALL_MASS = Param("mass", "kg", "mass M of the ball", Range(1e-6, 100.0), ScaledBodyMass("ball"))
+
+
 class CueStrike(Scenario):
     """A billiard ball struck by a horizontal cue at ``height`` above its centre: the slip the blow leaves
     (B1), the skid under Coulomb friction to rolling (B2), and how MuJoCo's contact does it."""
@@ -156,10 +162,8 @@ class CueStrike(Scenario):
     title = "Billiard ball struck by a cue: no-skid height 2R/5, skid to roll under Coulomb friction"
     env_id = "rigidbench/CueStrike-v0"
     params = (
-        Param(
-            "radius", "m", "radius R of the solid ball (I = 2/5 M R^2)", Range(1e-3, 1.0), SphereRadius("ball", "ball")
-        ),
-        Param("mass", "kg", "mass M of the ball", Range(1e-6, 100.0), ScaledBodyMass("ball")),
+        BALL_RADIUS,
+        BALL_MASS,
         Param(
             "mu",
             "1",

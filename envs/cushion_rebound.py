@@ -21,9 +21,9 @@ import numpy as np
 
 from rigidbench import pulse
 from rigidbench.analytic import percussion
+from rigidbench.envs.cue_strike import BALL_MASS, BALL_RADIUS, CueStrike, CueStrikeEnv, settle
 from rigidbench.envs.cue_strike import CHECKS as CUE_CHECKS
-from rigidbench.envs.cue_strike import CueStrike, CueStrikeEnv, settle
-from rigidbench.params import GeomFriction, Gravity, Numeric, Param, Range, ScaledBodyMass, SphereRadius, positive
+from rigidbench.params import GeomFriction, Gravity, Numeric, Param, Range, positive
 from rigidbench.scenario import Case, Check
 from rigidbench.simulate import Trajectory
 
@@ -52,10 +52,8 @@ class CushionRebound(CueStrike):
     title = "Rolling ball rebounding from a cushion: no skid at 7/10 of the diameter"
     env_id = "rigidbench/CushionRebound-v0"
     params = (
-        Param(
-            "radius", "m", "radius R of the solid ball (I = 2/5 M R^2)", Range(1e-3, 1.0), SphereRadius("ball", "ball")
-        ),
-        Param("mass", "kg", "mass M of the ball", Range(1e-6, 100.0), ScaledBodyMass("ball")),
+        BALL_RADIUS,
+        BALL_MASS,
         Param(
             "mu",
             "1",

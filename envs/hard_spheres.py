@@ -24,7 +24,7 @@ import mujoco
 import numpy as np
 
 from rigidbench.analytic import scattering
-from rigidbench.contact import MIN_STEPS, ContactSpring, contact_spring, elastic_contact
+from rigidbench.contact import MIN_STEPS, ContactSpring, contact_spring, elastic_contact, require_overlap_at_most
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.params import BodyMass, ContactStiffness, GeomSize, Numeric, Param, Range, positive
 from rigidbench.scenario import Case, Check, Scenario
@@ -212,13 +212,7 @@ class HardSpheres(Scenario):
                 f"parameter 'b' = {params['b']:g} m is outside the valid range [0, r1 + r2) = [0, {a:g}) m: "
                 "the spheres would miss"
             )
-        depth = params["speed"] / np.sqrt(params["stiffness"])
-        if not depth <= 0.1 * a:
-            raise ValueError(
-                f"parameter 'stiffness' = {params['stiffness']:g} 1/s^2 lets the spheres overlap by speed/sqrt(k) = "
-                f"{depth:.3g} m, more than 10 % of r1 + r2 = {a:g} m: use stiffness >= "
-                f"{(params['speed'] / (0.1 * a)) ** 2:.3g} 1/s^2 (or a lower speed)"
-            )
+        require_overlap_at_most(params["speed"], params["stiffness"], a, 0.1, "or use a lower speed")
 
     def check_model(self, model: mujoco.MjModel) -> None:
         spring = self._spring(model)

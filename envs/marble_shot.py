@@ -29,7 +29,7 @@ import numpy as np
 
 from rigidbench import contact, pulse
 from rigidbench.analytic import percussion
-from rigidbench.envs.planar import BlowEnv, body_state, free_body_motion
+from rigidbench.envs.planar import BlowEnv, body_state, free_body_motion, require_strike_on_stick
 from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
@@ -120,12 +120,7 @@ class MarbleShot(Scenario):
     checks = CHECKS
 
     def validate(self, params: Mapping[str, Any]) -> None:
-        if params["offset"] > params["length"] / 2:
-            raise ValueError(
-                f"parameter 'offset' = {params['offset']:g} m is outside the valid range "
-                f"(0, {params['length'] / 2:g}] m (half the stick's length = {params['length']:g} m):"
-                " the blow must hit the stick"
-            )
+        require_strike_on_stick(params["offset"], params["length"])
 
     def check_model(self, model: mujoco.MjModel) -> None:
         solref = model.geom("stick").solref

@@ -155,3 +155,18 @@ class BlowEnv(ScenarioEnv):
         dx, dy = measured[0] - predicted[0], measured[1] - predicted[1]
         dh = (measured[2] - predicted[2] + np.pi) % (2 * np.pi) - np.pi
         return float((abs(dx) + abs(dy)) / self.params["length"] + abs(dh) / np.pi)
+
+
+def require_strike_on_stick(offset: float, length: float) -> None:
+    """Refuse a blow `offset` (m, from the centre) beyond the end of a stick of full `length` (m).
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter, its value and the valid range.
+    """
+    if offset > length / 2:
+        raise ValueError(
+            f"parameter 'offset' = {offset:g} m is outside the valid range (0, {length / 2:g}] m (half the stick's "
+            f"length = {length:g} m): the blow must hit the stick"
+        )

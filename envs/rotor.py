@@ -140,15 +140,17 @@ class RotorEnv(ScenarioEnv):
 
     def _load(self, case: str, params) -> None:
         super()._load(case, params)
+        adr = int(self.model.jnt_qposadr[0]) + (3 if self.model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE else 0)
+        self._quat = slice(adr, adr + 4)
+        self._body_id = self.model.body(self.body).id
         self._bind_views()
 
     def _bind_views(self) -> None:
-        """Views into `self.data` read and written every step (rebuilt whenever `self.data` is replaced, e.g.
-        by `rigidbench.suite`, which binds the env to dm_control's physics)."""
+        """Views into `self.data` read and written every step, rebuilt whenever `self.data` is another MjData
+        (the dm_control view and the task envs' theory rollouts rebind it)."""
         data = self.data
-        adr = int(self.model.jnt_qposadr[0]) + (3 if self.model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE else 0)
-        self._obs_views = (data.qpos[adr : adr + 4], data.qvel[-3:])
-        self._torque = data.xfrc_applied[self.model.body(self.body).id, 3:6]
+        self._obs_views = (data.qpos[self._quat], data.qvel[-3:])
+        self._torque = data.xfrc_applied[self._body_id, 3:6]
         self._views_of = data
 
     def _apply_action(self, action: np.ndarray) -> None:

@@ -168,3 +168,21 @@ def elastic_contact(
             f"timestep <= {contact.duration / min_steps:.3g} s"
         )
     return contact
+
+
+def require_overlap_at_most(speed: float, stiffness: float, contact_distance: float, fraction: float, why: str) -> None:
+    """Refuse a contact so soft that a head-on approach at `speed` (m/s) overlaps by more than `fraction` of the
+    `contact_distance` (m): the largest penetration is speed / sqrt(k).
+
+    Raises
+    ------
+    ValueError
+        Naming the stiffness parameter, the overlap, and the smallest stiffness that is accepted.
+    """
+    depth = speed / math.sqrt(stiffness)
+    if not depth <= fraction * contact_distance:
+        raise ValueError(
+            f"parameter 'stiffness' = {stiffness:g} 1/s^2 lets the spheres overlap by speed/sqrt(k) = {depth:.3g} m, "
+            f"more than {fraction:.0%} of r1 + r2 = {contact_distance:g} m ({why}): use stiffness >= "
+            f"{(speed / (fraction * contact_distance)) ** 2:.3g} 1/s^2"
+        )

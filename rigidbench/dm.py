@@ -102,6 +102,8 @@ def load(scenario: str, *, case: str | None = None, params: Mapping[str, Any] | 
         For an unknown scenario or id, or invalid options.
     """
     env_id = scenario if "/" in scenario else registry.get(scenario).env_id
+    if env_id is None:
+        raise ValueError(f"scenario '{scenario}' has no stepping environment (a batch scenario): no dm_env view")
     if env_id not in gym.registry:
         raise ValueError(f"unknown environment {env_id!r}")
     env = gym.make(env_id, **env_kwargs).unwrapped

@@ -61,7 +61,12 @@ def parse_target(target: str) -> tuple[Scenario, list[str]]:
 
 
 def env_classes() -> dict[str, type]:
-    """Every gymnasium env class defined next to a scenario, by gymnasium id."""
+    """Every gymnasium env class defined next to a scenario, by gymnasium id.
+
+    A class that sets `scenario_cls` is the validation env of that scenario (id ``scenario_cls.env_id``); a
+    class that also sets its own ``env_id`` (a control task on the scenario, `rigidbench.envs.task`) is
+    registered under that id instead.
+    """
     from rigidbench.envs.base import ScenarioEnv
 
     scenarios()  # imports every env module
@@ -70,8 +75,8 @@ def env_classes() -> dict[str, type]:
     while stack:
         cls = stack.pop()
         stack.extend(cls.__subclasses__())
-        if "scenario_cls" in vars(cls):
-            found[cls.scenario_cls.env_id] = cls
+        if "scenario_cls" in vars(cls) or "env_id" in vars(cls):
+            found[vars(cls).get("env_id", cls.scenario_cls.env_id)] = cls
     return found
 
 

@@ -231,7 +231,8 @@ def _settings_table(rows) -> str:
     body = []
     for slug, s in seen.values():
         cells = "".join(
-            f"<td>{html.escape(_num(s.get(k)) if not isinstance(s.get(k), list) else str(s[k]))}</td>" for k in keys
+            f"<td>{html.escape(_num(s.get(k)) if not isinstance(s.get(k), (list, tuple)) else str(s[k]))}</td>"
+            for k in keys
         )
         body.append(f'<tr data-scenario="{html.escape(slug)}"><td>{html.escape(slug)}</td>{cells}</tr>')
     return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"

@@ -81,6 +81,59 @@ class ScenarioTask(base.Task):
         return None
 
 
+class ControlTask(base.Task):
+    """A dm_control task for a closed-loop control task env (`rigidbench.envs.task.ClosedLoopTask`): the target
+    is sampled from the task's own random state at each episode, and the env's hooks give the initial state,
+    observation, action and reward terms. ``theory_action(physics)`` is the env's theory policy."""
+
+    def __init__(self, env, random=None):
+        super().__init__(random=random)
+        self._env = env  # the gymnasium task env; its model is the physics' model
+        self._action = np.zeros(env.action_space.shape)
+
+    def _bind(self, physics: Physics) -> None:
+        self._env.data = physics.data.ptr
+
+    def initialize_episode(self, physics: Physics) -> None:
+        self._env.reset(seed=int(self.random.randint(2**31)))  # samples the target, sets the initial state
+        with physics.reset_context():
+            mujoco.mj_copyData(physics.data.ptr, physics.model.ptr, self._env.data)
+        self._bind(physics)
+
+    def action_spec(self, physics: Physics) -> specs.BoundedArray:
+        space = self._env.action_space
+        return specs.BoundedArray(space.shape, np.float64, space.low, space.high, name="action")
+
+    def before_step(self, action, physics: Physics) -> None:
+        self._bind(physics)
+        self._action = self._env._checked_action(np.asarray(action, dtype=float))
+        self._env._apply_action(self._action)
+
+    def after_step(self, physics: Physics) -> None:
+        self._env._k += 1  # the env's step counter: its reward terms and theory policy may depend on it
+
+    def get_observation(self, physics: Physics) -> collections.OrderedDict:
+        self._bind(physics)
+        return collections.OrderedDict(observation=self._env._observation())
+
+    def get_reward(self, physics: Physics) -> float:
+        self._bind(physics)
+        terms = self._env._terms(self._action)
+        return float(sum(terms[name] for name in self._env.reward_terms))
+
+    def get_termination(self, physics: Physics) -> float | None:
+        """0 (terminal) on divergence; 1 (a truncation) at the episode's end, which a task may sample per episode."""
+        diverged = ScenarioTask.get_termination(self, physics)
+        if diverged is not None:
+            return diverged
+        return 1.0 if self._env._k >= self._env._nsteps else None
+
+    def theory_action(self, physics: Physics) -> np.ndarray:
+        """The task's theory action (baseline) at the physics' current state."""
+        self._bind(physics)
+        return self._env.theory_action()
+
+
 def load(
     scenario: str,
     task: str | None = None,
@@ -93,9 +146,12 @@ def load(
     Parameters
     ----------
     scenario : str
-        Scenario slug (the "domain"), e.g. ``"heavy-top"``.
+        Scenario slug (the "domain"), e.g. ``"heavy-top"``; or the gymnasium id of a closed-loop control task,
+        e.g. ``"rigidbench/TopPrecession-v0"`` (`ControlTask`; its target is sampled per episode from
+        ``task_kwargs["random"]``). One-shot tasks (one action per episode) have the dm_env view only
+        (`rigidbench.dm.load`): a dm_control task steps the physics itself, a fixed number of sub-steps.
     task : str, optional
-        Case name (the "task"), e.g. ``"nutation"``; default: the scenario's first case.
+        Case name (the "task"), e.g. ``"nutation"``; default: the scenario's first case. None for a task id.
     task_kwargs : mapping, optional
         ``params`` (parameter overrides, SI), ``profile`` (settings profile), ``random`` (seed).
     environment_kwargs : mapping, optional
@@ -112,7 +168,11 @@ def load(
     task_kwargs = dict(task_kwargs or {})
     params = task_kwargs.pop("params", None)
     profile_name = task_kwargs.pop("profile", "reference")
+    if "/" in scenario:
+        return _load_task(scenario, task, params, profile_name, task_kwargs, environment_kwargs)
     sc = registry.get(scenario)
+    if sc.env_id is None:
+        raise ValueError(f"scenario '{scenario}' has no stepping environment (a batch scenario): no dm_control view")
     env = gym.make(sc.env_id, case=task, params=params, profile=profile_name).unwrapped
     model = sc.build(sc.resolve(sc.case(task), params), _profile(profile_name))
     physics = Physics.from_model(dm_mujoco.wrapper.MjModel(model))
@@ -120,4 +180,25 @@ def load(
     if task_kwargs:
         raise ValueError(f"unknown task_kwargs {sorted(task_kwargs)}; valid: params, profile, random")
     kwargs = {"time_limit": env.episode_duration, "n_sub_steps": env.frame_skip, **dict(environment_kwargs or {})}
+    return control.Environment(physics, dm_task, **kwargs)
+
+
+def _load_task(env_id, task, params, profile_name, task_kwargs, environment_kwargs) -> control.Environment:
+    import gymnasium as gym
+
+    from rigidbench.envs.task import ClosedLoopTask
+
+    cls = registry.env_classes().get(env_id)
+    if cls is None or not issubclass(cls, ClosedLoopTask):
+        tasks = sorted(i for i, c in registry.env_classes().items() if issubclass(c, ClosedLoopTask))
+        raise ValueError(f"{env_id!r} is not a closed-loop control task; valid: {', '.join(tasks)}")
+    if task is not None:
+        raise ValueError(f"a control task takes no case (task = {task!r}): its target is sampled per episode")
+    env = gym.make(env_id, params=params, profile=profile_name, regret=False).unwrapped
+    physics = Physics.from_model(dm_mujoco.wrapper.MjModel(env.model))
+    dm_task = ControlTask(env, random=task_kwargs.pop("random", None))
+    if task_kwargs:
+        raise ValueError(f"unknown task_kwargs {sorted(task_kwargs)}; valid: params, profile, random")
+    # The task ends its own episodes (get_termination): their length may be sampled per episode.
+    kwargs = {"time_limit": float("inf"), "n_sub_steps": env.frame_skip, **dict(environment_kwargs or {})}
     return control.Environment(physics, dm_task, **kwargs)

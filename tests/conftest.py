@@ -15,6 +15,15 @@ def pytest_generate_tests(metafunc):
         metafunc.parametrize("case_id", ids)
     if "env_id" in metafunc.fixturenames:
         metafunc.parametrize("env_id", sorted(registry.env_classes()))
+    # Validation envs (zero action = the textbook problem) and control task envs (rigidbench.envs.task).
+    from rigidbench.envs.task import TaskEnv
+
+    envs = registry.env_classes()
+    if "validation_env_id" in metafunc.fixturenames:
+        ids = sorted(i for i, cls in envs.items() if not issubclass(cls, TaskEnv))
+        metafunc.parametrize("validation_env_id", ids)
+    if "task_env_id" in metafunc.fixturenames:
+        metafunc.parametrize("task_env_id", sorted(i for i, cls in envs.items() if issubclass(cls, TaskEnv)))
 
 
 @pytest.fixture(scope="session")

@@ -16,8 +16,15 @@ def test_every_env_has_a_dm_env_view_with_consistent_specs(env_id):
     action = np.zeros(env.action_spec().shape)
     env.action_spec().validate(action)
     step = env.step(action)
-    assert step.step_type == StepType.MID and step.discount == 1.0
-    assert step.reward == pytest.approx(-env.last_info["deviation"])
+    info = env.last_info
+    if "deviation" in info:  # a validation env: MID step, reward = -deviation from theory
+        assert step.step_type == StepType.MID and step.discount == 1.0
+        assert step.reward == pytest.approx(-info["deviation"])
+    else:  # a task: the gymnasium reward, its terms and regret in last_info; a one-shot task ends at once
+        assert (step.step_type, step.discount) in ((StepType.MID, 1.0), (StepType.LAST, 0.0))
+        terms = [k for k in info if k.startswith("reward_")]
+        assert terms and step.reward == pytest.approx(sum(info[k] for k in terms), rel=1e-12)
+        assert np.isfinite(info["regret"])
     env.reward_spec().validate(np.float64(step.reward))
 
 
@@ -63,7 +70,81 @@ def test_dm_control_suite_accepts_every_scenario():
     pytest.importorskip("dm_control", reason="needs the dm extra")
     from rigidbench import suite
 
-    for slug in registry.scenarios():
+    for slug, scenario in registry.scenarios().items():
+        if scenario.env_id is None:  # a batch scenario (e.g. a Monte Carlo beam) has no stepping env to view
+            with pytest.raises(ValueError, match="no stepping environment"):
+                suite.load(slug)
+            continue
         env = suite.load(slug)
         env.reset()
         env.step(np.zeros(env.action_spec().shape))
+
+
+def test_dm_control_suite_applies_actions_as_the_gymnasium_env_does():
+    """The suite view steps the same model through the env's own action hook: same actions, same states, bit for
+    bit (dm_control's RK4 step is mj_step)."""
+    pytest.importorskip("dm_control", reason="needs the dm extra")
+    import gymnasium as gym
+
+    from rigidbench import suite
+
+    env = suite.load("heavy-top", "nutation")
+    env.reset()
+    gym_env = gym.make("rigidbench/HeavyTop-v0", case="nutation").unwrapped
+    gym_env.reset()
+    rng = np.random.default_rng(0)
+    for _ in range(30):
+        action = rng.uniform(-0.05, 0.05, 3)
+        ts = env.step(action)
+        obs, *_ = gym_env.step(action)
+    np.testing.assert_array_equal(ts.observation["observation"], obs)
+    assert np.abs(obs[4:] - gym_env.scenario.start(gym_env.model).qvel).max() > 1e-3  # the torque did act
+
+
+def test_every_task_has_a_dm_env_view_reporting_regret(task_env_id):
+    env = dm.load(task_env_id)
+    ts = env.reset()
+    assert set(env.last_info["target"]) == set(env.gym_env.target_names)
+    ts = env.step(env.gym_env.theory_action())
+    assert np.isfinite(env.last_info["regret"]) and set(env.last_info) >= {
+        "reward_" + n for n in env.gym_env.reward_terms
+    }
+    env.observation_spec()["observation"].validate(ts.observation["observation"])
+
+
+def test_dm_control_suite_runs_every_closed_loop_task_like_gymnasium(task_env_id):
+    """suite.load accepts a closed-loop task id: its theory policy scores the same return as in gymnasium, over
+    an episode of the same length, on the same sampled target."""
+    pytest.importorskip("dm_control", reason="needs the dm extra")
+    import gymnasium as gym
+
+    from rigidbench import suite
+    from rigidbench.envs.task import ClosedLoopTask
+
+    if not issubclass(registry.env_classes()[task_env_id], ClosedLoopTask):
+        with pytest.raises(ValueError, match="not a closed-loop control task"):
+            suite.load(task_env_id)
+        return
+    env = suite.load(task_env_id, task_kwargs={"random": 0})
+    ts = env.reset()
+    target = dict(env.task._env.target)
+    total, steps = 0.0, 0
+    while not ts.last():
+        ts = env.step(env.task.theory_action(env.physics))
+        total += ts.reward
+        steps += 1
+    assert ts.discount == 1.0
+    gym_env = gym.make(task_env_id).unwrapped
+    gym_env.reset(options={"target": {k: target[k] for k in gym_env._target_ranges()}})
+    assert steps == len(gym_env._reference)
+    assert total == pytest.approx(gym_env._reference.sum(), rel=1e-12, abs=1e-15)
+
+
+def test_dm_control_suite_refuses_an_id_that_is_not_a_closed_loop_task():
+    pytest.importorskip("dm_control", reason="needs the dm extra")
+    from rigidbench import suite
+
+    with pytest.raises(ValueError, match="not a closed-loop control task"):
+        suite.load("rigidbench/HeavyTop-v0")
+    with pytest.raises(ValueError, match="takes no case"):
+        suite.load("rigidbench/TopPrecession-v0", "nutation")

@@ -70,6 +70,8 @@ def test_any_parameters_either_run_or_raise_a_value_error_naming_them(scenario, 
 def test_any_finite_actions_give_finite_observations_or_a_divergence_flag(env_id, actions):
     import gymnasium as gym
 
+    from rigidbench.envs.task import ShotTask
+
     env = gym.make(env_id).unwrapped
     env.reset(seed=0)
     n = env.action_space.shape[0]
@@ -78,7 +80,8 @@ def test_any_finite_actions_give_finite_observations_or_a_divergence_flag(env_id
         obs, _r, terminated, _t, info = env.step(action)
         assert np.isfinite(obs).all()
         if terminated:
-            assert info["diverged"]
+            # A validation env terminates only on divergence; a one-shot task ends every episode after its step.
+            assert info["diverged"] or isinstance(env, ShotTask)
             break
 
 

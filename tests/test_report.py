@@ -168,3 +168,17 @@ def test_clips_embed_a_moving_gif_per_scenario(documents, gl_available):
     assert len(gifs) == 1
     with Image.open(io.BytesIO(base64.b64decode(gifs[0]))) as im:
         assert im.n_frames > 1
+
+
+def test_report_of_fresh_contact_results_renders_their_settings_and_figures():
+    """Results simulated in-process (not read back from JSON) carry solref/solimp as tuples; the settings table
+    takes them as it takes JSON lists, and the scenario's figures come out."""
+    from rigidbench import report, results, runner
+
+    reference = runner.settings_for("reference")
+    jobs = runner.plan(["ball-stick:light-ball"], {}, reference)
+    rows = [row for batch in runner.execute(jobs, reference) for row in batch]
+    assert any(isinstance(row["settings"].get("solref"), tuple) for row in rows)
+    page = report.build([results.document(rows)])
+    assert "<h2>Settings</h2>" in page and "<td>((-100000000.0, 0.0),)</td>" in page
+    assert "Ball on a free stick: velocities after the impact" in page

@@ -127,3 +127,38 @@ def registered() -> list[str]:
     """Slugs with at least one plot function."""
     _discover()
     return sorted(_PLOTS)
+
+
+# ---- helpers shared by the figure modules ---------------------------------------------------------------------
+
+THEORY_STYLE = {"color": "k", "lw": 1.0}
+
+
+def simulated(run: CaseRun) -> bool:
+    """Whether a run kept its trajectory and did not diverge (so it can be drawn)."""
+    return run.trajectory is not None and run.diverged_at is None
+
+
+def try_run(ctx: PlotContext, case: str, overrides: dict | None = None) -> CaseRun | None:
+    """The case's run, or None if its parameters or these settings are refused (ValueError) or it diverged."""
+    try:
+        run = ctx.run(case, overrides)
+    except ValueError:
+        return None
+    return run if simulated(run) else None
+
+
+def settings_text(run: CaseRun) -> str:
+    """The settings a figure's title names: integrator, timestep, MuJoCo version."""
+    s = run.settings
+    return f"{s['integrator']}, dt = {s['timestep']:g} s, mujoco {s['mujoco']}"
+
+
+def measured_value(run: CaseRun, check: str) -> float:
+    """The measured value of a check in a run (NaN if the run did not score it)."""
+    return next((o.measured for o in run.outcomes if o.check.name == check), float("nan"))
+
+
+def thin(n: int, target: int = 400) -> slice:
+    """A stride that keeps about `target` of `n` samples for drawing markers."""
+    return slice(None, None, max(1, n // target))

@@ -10,19 +10,9 @@ import numpy as np
 from rigidbench import signals
 from rigidbench.analytic import tops
 from rigidbench.envs.rotor import free_body_motion
-from rigidbench.plots import Figure, PlotContext, plot
+from rigidbench.plots import THEORY_STYLE, Figure, PlotContext, plot, settings_text, thin
 
 SIM = {"color": "C3", "lw": 0, "marker": "o", "ms": 2.5, "alpha": 0.8}
-THEORY = {"color": "k", "lw": 1.0}
-
-
-def _settings_text(run) -> str:
-    s = run.settings
-    return f"{s['integrator']}, dt = {s['timestep']:g} s, mujoco {s['mujoco']}"
-
-
-def _thin(n: int, target: int = 400) -> slice:
-    return slice(None, None, max(1, n // target))
 
 
 @plot("heavy-top")
@@ -42,9 +32,9 @@ def heavy_top(ctx: PlotContext) -> list[Figure]:
         t_max, th_max = signals.extrema(traj.time, theta, -u_dot, "max")
         t_min, th_min = signals.extrema(traj.time, theta, -u_dot, "min")
         fig, (ax, res) = ctx.subplots(2, 1, sharex=True, height_ratios=(3, 1), figsize=(8, 5))
-        k = _thin(len(traj.time))
-        ax.plot(traj.time, theory, label="theory: u = cos(theta) from the elliptic solution (T3)", **THEORY)
-        ax.plot(traj.time[k], theta[k], label=f"MuJoCo ({_settings_text(run)})", **SIM)
+        k = thin(len(traj.time))
+        ax.plot(traj.time, theory, label="theory: u = cos(theta) from the elliptic solution (T3)", **THEORY_STYLE)
+        ax.plot(traj.time[k], theta[k], label=f"MuJoCo ({settings_text(run)})", **SIM)
         for value, name in ((top.theta_min, "theta_min = arccos u2"), (top.theta_max, "theta_max = arccos u1")):
             ax.axhline(value, color="0.5", ls="--", lw=0.8)
             ax.text(traj.time[-1], value, f" {name}", va="center", fontsize=8, color="0.3")
@@ -63,7 +53,7 @@ def heavy_top(ctx: PlotContext) -> list[Figure]:
                 f"Tilt of the symmetry axis from the upward vertical: MuJoCo (red dots) over the closed form of "
                 f"THEORY.md T3 (black), with the turning points theta_min and theta_max of T2 (dashed) and the "
                 f"measured extrema (blue triangles). Lower panel: the difference, at the level of the "
-                f"integration error ({_settings_text(run)}).",
+                f"integration error ({settings_text(run)}).",
                 fig,
             )
         )
@@ -110,7 +100,7 @@ def free_asymmetric_top(ctx: PlotContext) -> list[Figure]:
         m = free_body_motion(model, traj.time, traj.qpos, traj.qvel)
         theory = top.omega_body(traj.time)
         fig, (ax, res) = ctx.subplots(2, 1, sharex=True, height_ratios=(3, 1), figsize=(8, 5))
-        k = _thin(len(traj.time), 150)
+        k = thin(len(traj.time), 150)
         for i in range(3):
             ax.plot(traj.time, theory[:, i], color=f"C{i}", lw=1.0)
             ax.plot(traj.time[k], m.omega_B[k, i], "o", color=f"C{i}", ms=2.2, label=f"omega_{i + 1} (MuJoCo)")
@@ -130,7 +120,7 @@ def free_asymmetric_top(ctx: PlotContext) -> list[Figure]:
                 "Asymmetric top: body-frame omega(t) through the flips",
                 f"Spin started 0.02 rad off the intermediate axis (I = {', '.join(f'{x:g}' for x in top.inertia)} "
                 f"kg m^2): omega_2 reverses every 2K(k)/s (dotted lines: measured sign changes of omega_2) while "
-                f"omega_1 and omega_3 pulse. Dots: MuJoCo ({_settings_text(run)}); lines: the Jacobi elliptic "
+                f"omega_1 and omega_3 pulse. Dots: MuJoCo ({settings_text(run)}); lines: the Jacobi elliptic "
                 "solution (THEORY.md A2). Lower panel: the relative difference.",
                 fig,
             )
@@ -177,7 +167,7 @@ def _polhodes(ctx: PlotContext, model) -> Figure:
         traj = run.trajectory
         m = free_body_motion(model, traj.time, traj.qpos, traj.qvel)
         Lb = m.L_B / np.linalg.norm(m.L_B, axis=1, keepdims=True)
-        k = _thin(len(traj.time), 300)
+        k = thin(len(traj.time), 300)
         ax.plot(*Lb[k].T, "-o", lw=2.0, ms=2.0, color=f"C{i + 2}", label=f"MuJoCo: {case}", zorder=5)
     ax.set_xlabel("L1/|L|")
     ax.set_ylabel("L2/|L|")
