@@ -173,7 +173,14 @@ def _physics_block(model: mujoco.MjModel, state0: np.ndarray, n: int, chunk: int
 
 def bench_env_step(quick: bool) -> list[dict[str, Any]]:
     n, repeats = (200, 3) if quick else (2000, 21)
-    env_ids = [PEER_ENV, *sorted(registry.env_classes())]
+    env_ids = [PEER_ENV]
+    for env_id in sorted(registry.env_classes()):
+        # One-shot task envs (a step is a whole shot, one step an episode) are not per-step control.
+        env = gym.make(env_id, frame_skip=1)
+        env.reset(seed=0)
+        _, _, terminated, truncated, _ = env.step(np.zeros(env.action_space.shape))
+        if not (terminated or truncated):
+            env_ids.append(env_id)
     blocks, physics, about = {}, {}, {}
     for env_id in env_ids:
         env = gym.make(env_id, frame_skip=1)
@@ -640,17 +647,24 @@ def main(argv: list[str] | None = None) -> int:
     rows: list[dict[str, Any]] = []
     floor: dict[str, Any] = {"raw_rollout_s": float("nan"), "scenario_run_s": float("nan")}
     detail: dict[str, Any] = {}
-    if "env-step" not in args.skip:
+
+    def section(name: str) -> bool:
+        if name in args.skip:
+            return False
+        print(f"[{time.perf_counter() - t0:5.0f} s] {name} ...", file=sys.stderr, flush=True)
+        return True
+
+    if section("env-step"):
         rows += bench_env_step(args.quick)
-    if "runner" not in args.skip:
+    if section("runner"):
         runner_rows, detail = bench_runner(args.quick)
         rows += runner_rows
         floor = detail
-    if "cross-section" not in args.skip:
+    if section("cross-section"):
         rows += bench_cross_section(args.quick)
-    if "cli" not in args.skip:
+    if section("cli"):
         rows += bench_cli(args.quick, floor, thorough=not (args.quick or args.no_thorough))
-    if "render" not in args.skip:
+    if section("render"):
         rows += bench_render(args.quick)
     end = machine()
 
