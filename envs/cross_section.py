@@ -22,7 +22,6 @@ from typing import Any
 
 import mujoco
 import numpy as np
-from scipy import stats
 
 from rigidbench import contact
 from rigidbench.analytic import scattering
@@ -311,4 +310,6 @@ def goodness_of_fit(samples: np.ndarray, edges: np.ndarray, probabilities: np.nd
         exp.append(rest)
     obs, exp = np.array(obs), np.array(exp)
     exp *= obs.sum() / exp.sum()  # the quadrature's last digits, so the totals agree exactly
+    from scipy import stats  # here, not at the top: scipy.stats adds ~0.3 s to every `import rigidbench`
+
     return float(stats.chisquare(obs, exp).pvalue)

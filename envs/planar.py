@@ -60,7 +60,9 @@ class PlanarMotion:
     def heading(self) -> np.ndarray:
         """Angle (rad) of body y from world y, counter-clockwise about world z (unwrapped over time)."""
         axis = self.R_WB[..., :, 1]
-        return np.unwrap(np.arctan2(-axis[..., 0], axis[..., 1]), axis=0)
+        heading = np.arctan2(-axis[..., 0], axis[..., 1])
+        # One sample (an env step) has nothing to unwrap, and np.unwrap costs more than the rest of a step.
+        return heading if len(heading) == 1 else np.unwrap(heading, axis=0)
 
     def point_W(self, p_B: np.ndarray) -> np.ndarray:
         """World position (m) of the body point with body-frame coordinates `p_B`, shape (n, 3)."""

@@ -61,6 +61,12 @@ def _parser() -> argparse.ArgumentParser:
     )
     p_run.add_argument("--junit", metavar="PATH", help="write the results as JUnit XML")
     p_run.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p_run.add_argument(
+        "--jobs",
+        type=_positive_int,
+        metavar="N",
+        help="cases simulated at once, on threads (default: the CPUs available); results are the same for any N",
+    )
 
     p_sweep = sub.add_parser(
         "sweep",
@@ -156,6 +162,16 @@ def _positive_float(text: str) -> float:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
     if not value > 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {text!r}")
     return value
 
 
@@ -400,13 +416,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     interrupted = None
+    batches = runner.execute(todo, settings, progress=progress, workers=args.jobs or runner.default_workers())
     try:
-        for job, batch in zip(todo, runner.execute(todo, settings, progress=progress), strict=False):
+        for job, batch in zip(todo, batches, strict=False):
             by_job[job.name] = batch
             if journal_path:
                 journal.append(journal_path, job.name, batch)
     except Interrupted as exc:
         interrupted = exc
+    finally:
+        batches.close()  # an interrupt: cases not started are cancelled
     rows = [_strip(r) for job in jobs for r in by_job.get(job.name, [])]
     if interrupted is not None:
         print(

@@ -6,6 +6,8 @@ Euler angles follow THEORY.md section 0 (z-x-z, Goldstein = Wilcox section 11.7)
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -15,15 +17,34 @@ def quat_to_matrix(quat: np.ndarray) -> np.ndarray:
     The quaternions are normalised first (MuJoCo normalises them only when it integrates).
     """
     q = np.asarray(quat, dtype=float)
+    if q.size == 4:  # one state (an env step): the same arithmetic on floats, not ~40 ufunc calls on 1-element arrays
+        return _quat_to_matrix_one(*q.ravel().tolist()).reshape(*q.shape[:-1], 3, 3)
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = np.moveaxis(q, -1, 0)
-    return np.stack(
+    R = np.empty((*q.shape[:-1], 3, 3))  # filled in place: no stacking copies over long trajectories
+    R[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    R[..., 0, 1] = 2 * (x * y - w * z)
+    R[..., 0, 2] = 2 * (x * z + w * y)
+    R[..., 1, 0] = 2 * (x * y + w * z)
+    R[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    R[..., 1, 2] = 2 * (y * z - w * x)
+    R[..., 2, 0] = 2 * (x * z - w * y)
+    R[..., 2, 1] = 2 * (y * z + w * x)
+    R[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return R
+
+
+def _quat_to_matrix_one(w: float, x: float, y: float, z: float) -> np.ndarray:
+    # The operations of the vectorised path in the same order (numpy sums the 4 squares left to right), so the
+    # same bits: tests/test_performance.py checks it.
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    w, x, y, z = w / n, x / n, y / n, z / n
+    return np.array(
         [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
-        ],
-        axis=-2,
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
     )
 
 

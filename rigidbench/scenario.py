@@ -13,6 +13,7 @@ import dataclasses
 import functools
 import importlib.resources
 import math
+import threading
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -25,6 +26,7 @@ from rigidbench.settings import Settings, read_settings
 from rigidbench.simulate import Trajectory, simulate, steps_for
 
 Params = dict[str, Value]
+_BUILD_LOCK = threading.RLock()
 # A case value is a number, or a function of the other resolved parameters (e.g. a steady-precession rate).
 CaseValue = Value | Callable[[Mapping[str, Value]], Value]
 
@@ -281,15 +283,18 @@ class Scenario:
             If MuJoCo refuses the model (the message is MuJoCo's, prefixed with the scenario), or
             `check_model` does.
         """
-        spec = self.spec()
-        for p in self.params:
-            p.target.apply(spec, params[p.name])
-        if settings is not None:
-            settings.apply(spec)
-        try:
-            model = spec.compile()
-        except ValueError as exc:  # MuJoCo's compiler errors
-            raise ValueError(f"scenario '{self.slug}': MuJoCo refused the model: {exc}") from None
+        # MuJoCo parses and compiles without the GIL and does not document its compiler as thread-safe; the
+        # runner builds cases from several threads, so one build at a time (a few ms each).
+        with _BUILD_LOCK:
+            spec = self.spec()
+            for p in self.params:
+                p.target.apply(spec, params[p.name])
+            if settings is not None:
+                settings.apply(spec)
+            try:
+                model = spec.compile()
+            except ValueError as exc:  # MuJoCo's compiler errors
+                raise ValueError(f"scenario '{self.slug}': MuJoCo refused the model: {exc}") from None
         self.check_model(model)
         return model
 
@@ -362,5 +367,6 @@ def _model_xml(stem: str) -> str:
 @functools.cache
 def _defaults(cls: type[Scenario]) -> Params:
     scenario = cls()
-    model = scenario.spec().compile()
+    with _BUILD_LOCK:
+        model = scenario.spec().compile()
     return scenario.read_params(model)

@@ -96,9 +96,11 @@ def simulate(
         if control.shape != (nstep, model.nu):
             raise ValueError(f"control has shape {control.shape}, expected ({nstep}, {model.nu})")
         kwargs["control"] = control[None]
-    # rollout steps the MjData it is given: a scratch copy keeps `data` at the initial state, as promised.
-    states, _ = rollout.rollout(model, mujoco.MjData(model), state0[None], nstep=nstep, **kwargs)
-    states = np.concatenate([state0[None], states[0]])
+    # Row 0 is the initial state; rollout writes the nstep states after it in place (no copy afterwards). It
+    # steps the MjData it is given: a scratch copy keeps `data` at the initial state, as promised.
+    states = np.empty((nstep + 1, state0.size))
+    states[0] = state0
+    rollout.rollout(model, mujoco.MjData(model), state0[None], nstep=nstep, state=states[None, 1:], **kwargs)
     return split_states(model, states)
 
 

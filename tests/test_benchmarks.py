@@ -1,0 +1,31 @@
+"""The benchmark script runs end to end (issue 8), so it does not rot: a tiny budget, every section, a record."""
+
+import json
+import math
+import pathlib
+import subprocess
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+SECTIONS = {"env.step", "runner", "cross-section", "cli", "render"}
+
+
+def test_benchmark_script_runs_end_to_end_with_a_tiny_budget(tmp_path):
+    out = tmp_path / "bench.json"
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "run.py"), "--quick", "--json", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "InvertedPendulum-v5" in done.stdout and "raw mujoco.rollout" in done.stdout  # the table, with peers
+    record = json.loads(out.read_text())
+    assert record["quick"] and record["machine"]["load_average"] and record["machine"]["mujoco"]
+    rows = record["rows"]
+    assert {r["section"] for r in rows} == SECTIONS
+    for r in rows:  # a figure with a peer comes with the ratio between them, from the same run
+        if r["peer"] and r["value"] is not None:
+            assert r["peer_value"] > 0 and math.isfinite(r["ratio"]) and r["ratio"] > 0, r
+    env_rows = [r for r in rows if r["section"] == "env.step" and "physics_us" in r]
+    assert len(env_rows) >= 2 and all(r["physics_us"] > 0 and r["ceiling"] > 0 for r in env_rows)
