@@ -26,7 +26,7 @@ import numpy as np
 from rigidbench.analytic import scattering
 from rigidbench.contact import MIN_STEPS, ContactSpring, contact_spring, elastic_contact, require_overlap_at_most
 from rigidbench.envs.base import ScenarioEnv
-from rigidbench.params import BodyMass, ContactStiffness, GeomSize, Numeric, Param, Range, positive
+from rigidbench.params import BodyMass, ContactStiffness, GeomSize, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory, final_states, initial_states, simulate
 
@@ -146,15 +146,15 @@ class HardSpheres(Scenario):
     title = "Hard-sphere collision (smooth, elastic, target at rest)"
     env_id = "rigidbench/HardSpheres-v0"
     params = (
-        Param("m1", "kg", "projectile mass", positive(1e6), BodyMass("projectile")),
-        Param("m2", "kg", "target mass", positive(1e6), BodyMass("target")),
-        Param("r1", "m", "projectile radius", positive(100.0), GeomSize("projectile")),
-        Param("r2", "m", "target radius", positive(100.0), GeomSize("target")),
+        Param("m1", "kg", "projectile mass", Range(1e-6, 1e6), BodyMass("projectile")),
+        Param("m2", "kg", "target mass", Range(1e-6, 1e6), BodyMass("target")),
+        Param("r1", "m", "projectile radius", Range(1e-4, 100.0), GeomSize("projectile")),
+        Param("r2", "m", "target radius", Range(1e-4, 100.0), GeomSize("target")),
         Param(
             "speed",
             "m/s",
             "projectile's LAB speed u1 along +x (the target is at rest)",
-            positive(1e4),
+            Range(1e-3, 1e4),
             Numeric("speed"),
         ),
         Param("b", "m", "impact parameter, along +y, in [0, r1 + r2)", Range(0.0, 1e3), Numeric("b")),
@@ -162,7 +162,7 @@ class HardSpheres(Scenario):
             "stiffness",
             "1/s^2",
             "contact spring k: penetration'' = -k penetration (direct solref (-k, 0))",
-            positive(1e18),
+            Range(1.0, 1e18),
             ContactStiffness(("projectile", "target")),
         ),
     )
