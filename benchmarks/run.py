@@ -466,7 +466,7 @@ def bench_cli(quick: bool, floor: dict[str, Any], thorough: bool) -> list[dict[s
             f"{what}, wall",
             lap.wall,
             "s",
-            "raw mujoco.rollout of the same cases, in-process",
+            "raw rollouts of its single-rollout cases, in-process, in turn",
             floor["raw_rollout_s"],
             floor["raw_rollout_s"] / lap.wall,
             "<= 60 s",
