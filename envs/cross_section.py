@@ -26,7 +26,7 @@ import numpy as np
 from rigidbench import contact
 from rigidbench.analytic import scattering
 from rigidbench.envs.hard_spheres import HardSpheres
-from rigidbench.params import BodyMass, ContactStiffness, GeomSize, Numeric, Param, Range
+from rigidbench.params import Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import final_states, initial_states
 
@@ -109,6 +109,9 @@ class Beam:
     diverged: int
 
 
+_HARD = {p.name: p for p in HardSpheres.params}
+
+
 class CrossSection(Scenario):
     """A uniform beam of `n` smooth elastic sphere collisions: CM and LAB angular distributions as
     goodness-of-fit tests, and the total cross section from the hit fraction (THEORY.md C5, C6)."""
@@ -118,19 +121,9 @@ class CrossSection(Scenario):
     env_id = None
     # Threads for the batch (None: one per CPU). Results do not depend on it.
     nthread: int | None = None
+    # The pair's masses, radii, speed and contact are the hard-spheres scenario's parameters (one definition).
     params = (
-        Param("m1", "kg", "projectile mass", Range(1e-6, 1e6), BodyMass("projectile")),
-        Param("m2", "kg", "target mass", Range(1e-6, 1e6), BodyMass("target")),
-        Param("r1", "m", "projectile radius", Range(1e-4, 100.0), GeomSize("projectile")),
-        Param("r2", "m", "target radius", Range(1e-4, 100.0), GeomSize("target")),
-        Param("speed", "m/s", "projectile's LAB speed along +x (targets at rest)", Range(1e-3, 1e4), Numeric("speed")),
-        Param(
-            "stiffness",
-            "1/s^2",
-            "contact spring k: penetration'' = -k penetration (direct solref (-k, 0))",
-            Range(1.0, 1e18),
-            ContactStiffness(("projectile", "target")),
-        ),
+        *(_HARD[name] for name in ("m1", "m2", "r1", "r2", "speed", "stiffness")),
         Param("n", "1", "number of collisions in the beam", Range(100, 1e7), Numeric("samples"), integer=True),
         Param(
             "seed",
