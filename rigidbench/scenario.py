@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 
 from rigidbench.params import Param, Value, check_known
-from rigidbench.settings import Settings, read_settings
+from rigidbench.settings import Settings, read_settings, skip_idle_stages
 from rigidbench.simulate import Trajectory, simulate, steps_for
 
 Params = dict[str, Value]
@@ -275,7 +275,9 @@ class Scenario:
         return values
 
     def build(self, params: Mapping[str, Value], settings: Settings | None = None) -> mujoco.MjModel:
-        """Compile the model with `params` applied through MjSpec and `settings` on top.
+        """Compile the model with `params` applied through MjSpec and `settings` on top, with the pipeline stages
+        that can do nothing in it switched off (`rigidbench.settings.skip_idle_stages`: results bit for bit the
+        same, steps 20-30 % cheaper where nothing collides).
 
         Raises
         ------
@@ -296,6 +298,7 @@ class Scenario:
             except ValueError as exc:  # MuJoCo's compiler errors
                 raise ValueError(f"scenario '{self.slug}': MuJoCo refused the model: {exc}") from None
         self.check_model(model)
+        skip_idle_stages(model)
         return model
 
     def read_params(self, model: mujoco.MjModel) -> Params:

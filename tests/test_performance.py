@@ -10,7 +10,7 @@ import pytest
 from mujoco import rollout
 
 from rigidbench import cli, frames, registry, runner
-from rigidbench.settings import profile
+from rigidbench.settings import profile, read_settings
 from rigidbench.simulate import get_state, simulate
 
 VOLATILE = ("wall_time",)
@@ -143,3 +143,38 @@ def test_one_quaternion_takes_the_float_path_with_the_bits_of_the_vectorised_one
     for i in range(len(q)):
         np.testing.assert_array_equal(frames.quat_to_matrix(q[i]), batched[i])
     np.testing.assert_array_equal(frames.quat_to_matrix(q[:1]), batched[:1])
+
+
+@pytest.mark.parametrize("profile_name", ["reference", "mujoco-default"])
+def test_skipping_idle_stages_leaves_every_state_bit_for_bit_the_same(scenario, profile_name):
+    """`Scenario.build` switches off the stages that can do nothing (settings.idle_stages); 300 steps of every
+    scenario's first case, pushed by a generalised force so the state moves, are identical with them on."""
+    case = scenario.cases[0]
+    model = scenario.build(scenario.resolve(case), profile(profile_name))
+    skipped = model.opt.disableflags
+    states = {}
+    for flags in (skipped, 0):
+        model.opt.disableflags = flags
+        data = scenario.start(model)
+        data.qfrc_applied[:] = 1e-3
+        mujoco.mj_step(model, data, nstep=300)
+        states[flags] = get_state(model, data)
+    np.testing.assert_array_equal(states[skipped], states[0])
+
+
+def test_idle_stages_finds_what_can_collide_or_constrain():
+    from rigidbench.settings import idle_stages
+
+    def stages(body):
+        return idle_stages(mujoco.MjModel.from_xml_string(f"<mujoco><worldbody>{body}</worldbody></mujoco>"))
+
+    free = '<body><freejoint/><geom size=".1" contype="{}" conaffinity="{}"/></body>'
+    assert stages(free.format(0, 0) + free.format(0, 0)) == ("contact", "constraint")
+    assert stages(free.format(1, 0) + free.format(0, 1)) == ()  # contype of one meets conaffinity of the other
+    assert stages(free.format(2, 0) + free.format(0, 1)) == ("contact", "constraint")  # no common bit
+    # Two geoms of one body never collide; a limited joint is a constraint.
+    one_body = '<body><joint type="hinge" range="-1 1"/><geom size=".1"/><geom size=".1" pos=".3 0 0"/></body>'
+    assert stages(one_body) == ("contact",)
+    for slug, disabled in (("pendulum", ("contact", "constraint")), ("hard-spheres", ())):
+        scenario = registry.get(slug)
+        assert read_settings(scenario.build(scenario.resolve(scenario.cases[0])))["disabled"] == disabled
