@@ -106,6 +106,31 @@ class ContactStiffness:
 
 
 @dataclass(frozen=True)
+class ContactSteps:
+    """Timesteps per contact N (1) of an elastic contact on `geom`: sets the timestep to pi / (N sqrt(k)), so the
+    timestep follows the stiffness k (apply the stiffness first; `Settings.timestep` still overrides it).
+
+    A whole N puts the force's kink at contact exit on a step boundary, as a lead of whole steps does for the
+    entry: RK4 then meets no kink inside a step and stays fourth order (`rigidbench.contact`). Read back from the
+    compiled model as pi / (sqrt(k) timestep), whatever set the timestep.
+    """
+
+    geom: str
+
+    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
+        stiffness = -float(spec.geom(self.geom).solref[0])
+        if stiffness <= 0:
+            raise ValueError(f"geom '{self.geom}': contact steps need a direct-format solref (-k, -b), not a time")
+        spec.option.timestep = math.pi / (float(value) * math.sqrt(stiffness))
+
+    def read(self, model: mujoco.MjModel) -> Value:
+        from rigidbench.contact import contact_spring
+
+        stiffness = contact_spring(model.geom(self.geom).solref, model.opt.timestep).stiffness
+        return math.pi / (math.sqrt(stiffness) * float(model.opt.timestep))
+
+
+@dataclass(frozen=True)
 class GeomSize:
     """One entry of a geom's size (m), e.g. index 0 = a sphere's radius."""
 
