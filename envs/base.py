@@ -18,6 +18,7 @@ import numpy as np
 from rigidbench.scenario import Scenario
 from rigidbench.settings import Settings, profile, read_settings
 
+_FLOAT64 = np.dtype(np.float64)
 # Smallest shadow map (pixels per side) the envs render with; see `ScenarioEnv.render`.
 SHADOW_MAP_MIN = 1024
 
@@ -79,6 +80,9 @@ class ScenarioEnv(gym.Env):
         self._load(self._case_name, self._params)
         self.observation_space = self._observation_space()
         self.action_space = self._action_space()
+        if len(self.observation_space.shape) != 1:
+            raise TypeError(f"{type(self).__name__}: observations must be 1-D, not {self.observation_space.shape}")
+        self._action_shape = self.action_space.shape
         self._action_low = self.action_space.low.tolist()
         self._action_high = self.action_space.high.tolist()
 
@@ -100,15 +104,18 @@ class ScenarioEnv(gym.Env):
         raise NotImplementedError
 
     def _theory(self, t: np.ndarray) -> np.ndarray:
-        """The observables predicted by theory (zero action) at times `t` (s), shape (len(t), len(observables))."""
+        """The observables predicted by theory (zero action) at times `t` (s), shape (len(t), len(observables)).
+        Tabulated once per episode on the env's time grid; a step looks its row up as a list of floats."""
         raise NotImplementedError
 
-    def _measure(self, obs: np.ndarray) -> np.ndarray:
-        """The same observables measured from an observation, shape (len(observables),)."""
+    def _measure(self, obs: np.ndarray):
+        """The same observables measured from an observation: an ndarray of shape (len(observables),) or a
+        sequence of floats (cheaper per step where the hook computes in Python floats)."""
         raise NotImplementedError
 
-    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
-        """Normalised deviation from theory (documented per env); the reward is its negative."""
+    def _deviation(self, measured, predicted: list[float]) -> float:
+        """Normalised deviation of `measured` (as `_measure` returns it) from the theory's row `predicted`
+        (documented per env); the reward is its negative."""
         raise NotImplementedError
 
     def _begin(self) -> None:
@@ -135,23 +142,24 @@ class ScenarioEnv(gym.Env):
         return obs, info
 
     def step(self, action):
-        # Every line here runs once per step: look-ups that are not free (model.opt, the observable names) are
-        # cached by `_load`, and the hooks are called once each.
+        # Every line here runs once per step (issue 8): look-ups that are not free (model.opt, data.time, the
+        # observable names, the episode's end) are cached by `_load` or read once, and each hook is called once.
         self._apply_action(self._checked_action(action))
         data = self.data
-        mujoco.mj_step(self.model, data, nstep=self.frame_skip)
-        self._k += 1
+        mujoco.mj_step(self.model, data, self.frame_skip)  # positional: a keyword costs pybind11 ~0.2 us
+        k = self._k = self._k + 1
         obs = self._observation()
-        if self._diverged(obs):
+        time = data.time
+        # `_diverged`, inlined: time fell behind (MuJoCo reset a blown-up state) or the observation is not finite.
+        if time < self._time0 + (k - 0.5) * self._env_dt or not math.isfinite(sum(obs.tolist())):  # obs is 1-D
             obs = np.clip(
                 np.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0),
                 self.observation_space.low,
                 self.observation_space.high,
             )
-            return obs, 0.0, True, False, {"diverged": True, "time": float(data.time)}
-        info = self._step_info(obs, self._k)
-        truncated = data.time >= self.episode_duration - self._half_timestep
-        return obs, info["reward_deviation"], False, truncated, info
+            return obs, 0.0, True, False, {"diverged": True, "time": float(time)}
+        info = self._step_info(obs, k, time)
+        return obs, info["reward_deviation"], False, time >= self._end, info
 
     def _checked_action(self, action) -> np.ndarray:
         """`action` as float64 of the action space's shape, clipped to it.
@@ -161,10 +169,10 @@ class ScenarioEnv(gym.Env):
         ValueError
             If the shape is wrong or a component is not finite.
         """
-        if not (type(action) is np.ndarray and action.dtype == np.float64):
+        if not (type(action) is np.ndarray and action.dtype is _FLOAT64):  # dtypes of builtin types are singletons
             action = np.asarray(action, dtype=np.float64)
-        if action.shape != self.action_space.shape:
-            raise ValueError(f"action shape {action.shape} != {self.action_space.shape}")
+        if action.shape != self._action_shape:
+            raise ValueError(f"action shape {action.shape} != {self._action_shape}")
         # Fast path: every component inside [low, high] (NaN fails the comparison and takes the slow path). A
         # loop, not all(...), and no zip(strict=): each costs ~0.3 us a step; the shape was checked above.
         for lo, v, hi in zip(self._action_low, action.tolist(), self._action_high):  # noqa: B905
@@ -218,7 +226,6 @@ class ScenarioEnv(gym.Env):
         self._prediction = self.scenario.predict(self.model, self.data)
         self.episode_duration = float(self.scenario.duration(self._prediction))
         self._settings_record = read_settings(self.model)
-        self._half_timestep = 0.5 * self.model.opt.timestep
         self._observable_names = tuple(self.observables)  # may be a property of the model: read once, not per step
         self._case = case
         self._begin()
@@ -227,25 +234,35 @@ class ScenarioEnv(gym.Env):
         self._time0 = float(self.data.time)
         n = int(np.ceil(self.episode_duration / env_dt)) + 2
         self._k = 0
-        self._table = self._theory(self._time0 + env_dt * np.arange(n))
+        table = self._theory(self._time0 + env_dt * np.arange(n))
+        if table.shape[1:] != (len(self._observable_names),):
+            raise ValueError(
+                f"{type(self).__name__}: the theory gives {table.shape[1:]} values a step for the "
+                f"{len(self._observable_names)} observables {self._observable_names}"
+            )
+        # Rows as lists of floats: a step indexes a list and builds its info from floats, no ndarray per step.
+        self._rows = table.tolist()
+        self._table_len = len(self._rows)
+        self._end = self.episode_duration - 0.5 * self.model.opt.timestep  # truncate from this time on
 
-    def _step_info(self, obs: np.ndarray, k: int) -> dict[str, Any]:
-        table = self._table
-        predicted = table[k] if k < len(table) else self._theory(np.array([self.data.time]))[0]
+    def _step_info(self, obs: np.ndarray, k: int, time: float | None = None) -> dict[str, Any]:
+        """The info of step `k` (0: reset), at simulated `time` (s; default ``data.time``)."""
+        if time is None:
+            time = self.data.time
+        predicted = self._rows[k] if k < self._table_len else self._theory(np.array([time]))[0].tolist()
         measured = self._measure(obs)
         deviation = self._deviation(measured, predicted)
         names = self._observable_names
-        measured_values = _float_list(measured)
-        predicted_values = predicted.tolist()
-        if not len(names) == len(measured_values) == len(predicted_values):
+        measured_values = measured.tolist() if type(measured) is np.ndarray else _float_list(measured)
+        if k == 0 and len(measured_values) != len(names):  # the lengths are fixed for the episode: check at reset
             raise ValueError(
-                f"{type(self).__name__}: {len(measured_values)} measured and {len(predicted_values)} predicted "
-                f"values for the {len(names)} observables {names}"
+                f"{type(self).__name__}: {len(measured_values)} measured values for the {len(names)} observables "
+                f"{names}"
             )
         return {
-            "time": self.data.time,
-            "measured": dict(zip(names, measured_values)),  # noqa: B905 (lengths checked above)
-            "predicted": dict(zip(names, predicted_values)),  # noqa: B905
+            "time": time,
+            "measured": dict(zip(names, measured_values)),  # noqa: B905 (lengths checked at reset)
+            "predicted": dict(zip(names, predicted)),  # noqa: B905 (checked in `_load`)
             "deviation": deviation,
             "reward_deviation": -deviation,
             "diverged": False,
@@ -255,7 +272,7 @@ class ScenarioEnv(gym.Env):
         """Deviation, measured and predicted observables at the current state (any time, no table)."""
         measured = self._measure(self._observation())
         predicted = self._theory(np.array([self.data.time]))[0]
-        return self._deviation(measured, predicted), measured, predicted
+        return self._deviation(measured, predicted.tolist()), np.asarray(measured, dtype=float), predicted
 
     def _diverged(self, obs: np.ndarray) -> bool:
         """MuJoCo resets a blown-up state (bad qpos, qvel or qacc): time jumps back to ~0, and NaN never
@@ -271,14 +288,13 @@ class ScenarioEnv(gym.Env):
 
 
 def _float_list(values) -> list:
-    """``np.asarray(values).tolist()``, without the array when `values` is already a sequence of floats."""
+    """``np.asarray(values).tolist()``, without the array (or a copy) when `values` is already a sequence of floats."""
     if type(values) is np.ndarray:
         return values.tolist()
-    out = list(values)
-    for v in out:  # a loop, not all(...): this runs every step
+    for v in values:  # a loop, not all(...): this runs every step
         if type(v) is not float:
             return np.asarray(values).tolist()
-    return out
+    return values
 
 
 def _settings(profile_name: str, integrator: str | None, timestep: float | None) -> Settings:

@@ -334,26 +334,32 @@ class PendulumEnv(ScenarioEnv):
     def _action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_torque, self.max_torque, shape=(1,), dtype=np.float64)
 
+    def _load(self, case: str, params) -> None:
+        super()._load(case, params)
+        # Read per step: cached here (a MuJoCo attribute or a mapping look-up costs ~0.1 us each).
+        self._nq = self.model.nq
+        self._scale = float(self.prediction["_scale"])
+
     def _observation(self) -> np.ndarray:
         # qpos then qvel, in one C call: the state components (QPOS | QVEL) in MuJoCo's order.
-        obs = np.empty(2 * self.model.nq)
+        obs = np.empty(2 * self._nq)
         mujoco.mj_getState(self.model, self.data, obs, _QPOS_QVEL)
         return obs
 
     def _apply_action(self, action: np.ndarray) -> None:
         self.data.qfrc_applied[0] = action[0]
 
-    def _measure(self, obs: np.ndarray) -> np.ndarray:
-        return obs[: self.model.nq]
+    def _measure(self, obs: np.ndarray) -> list[float]:
+        return obs.tolist()[: self._nq]
 
-    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
         # max |measured - predicted| over Python floats: numpy's number (NaN included) without three temporaries
         # and a reduction per step.
         worst = -1.0
-        for m, p in zip(measured.tolist(), predicted.tolist()):  # noqa: B905 (lengths checked by _step_info)
+        for m, p in zip(measured, predicted):  # noqa: B905 (lengths checked by _step_info)
             d = abs(m - p)
             if d > worst or d != d:
                 worst = d
                 if d != d:
                     break
-        return float(worst / self.prediction["_scale"])
+        return float(worst / self._scale)
