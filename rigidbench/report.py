@@ -222,7 +222,7 @@ def _page(rows, runs, sweeps, versions, figures) -> str:
 
 
 def _settings_table(rows) -> str:
-    keys = ["integrator", "timestep", "cone", "solref", "solimp", "mujoco"]
+    keys = ["integrator", "timestep", "cone", "solref", "solimp", "disabled", "mujoco"]
     seen: dict[tuple, tuple[str, dict]] = {}  # one line per scenario and distinct settings
     for r in rows:
         key = (r["scenario"], *(json.dumps(r["settings"].get(k)) for k in keys))
@@ -230,12 +230,18 @@ def _settings_table(rows) -> str:
     head = "".join(f"<th>{k}</th>" for k in ["scenario", *keys])
     body = []
     for slug, s in seen.values():
-        cells = "".join(
-            f"<td>{html.escape(_num(s.get(k)) if not isinstance(s.get(k), (list, tuple)) else str(s[k]))}</td>"
-            for k in keys
-        )
+        cells = "".join(f"<td>{html.escape(_setting(s.get(k)))}</td>" for k in keys)
         body.append(f'<tr data-scenario="{html.escape(slug)}"><td>{html.escape(slug)}</td>{cells}</tr>')
     return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
+
+
+def _setting(value) -> str:
+    """A settings cell: a number, a tuple of numbers, or names (the disabled stages: "-" when none)."""
+    if isinstance(value, (list, tuple)):
+        if all(isinstance(v, str) for v in value):
+            return ", ".join(value) or "-"
+        return str(tuple(value))
+    return _num(value)
 
 
 def _results_table(rows) -> str:
