@@ -29,3 +29,22 @@ def test_benchmark_script_runs_end_to_end_with_a_tiny_budget(tmp_path):
             assert r["peer_value"] > 0 and math.isfinite(r["ratio"]) and r["ratio"] > 0, r
     env_rows = [r for r in rows if r["section"] == "env.step" and "physics_us" in r]
     assert len(env_rows) >= 2 and all(r["physics_us"] > 0 and r["ceiling"] > 0 for r in env_rows)
+
+
+def test_profile_summary_counts_samples_inside_env_step_by_line(tmp_path):
+    """benchmarks/profile_step.py sums py-spy's raw samples under env.step by the line they were executing."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from profile_step import top_lines
+    finally:
+        sys.path.pop(0)
+    raw = tmp_path / "samples.txt"
+    raw.write_text(
+        "<module> (loop.py:9);OrderEnforcing.step (common.py:424);ScenarioEnv.step (base.py:149) 70\n"
+        "<module> (loop.py:9);OrderEnforcing.step (common.py:424);ScenarioEnv._step_info (base.py:272) 20\n"
+        "<module> (loop.py:9);OrderEnforcing.step (common.py:424) 10\n"
+        "<module> (loop.py:9);reset (base.py:130) 500\n"
+    )
+    total, lines = top_lines(raw)
+    assert total == 100  # the reset's samples are outside env.step
+    assert lines[0] == ("ScenarioEnv.step (base.py:149)", 70) and len(lines) == 3
