@@ -354,6 +354,8 @@ class CueStrikeEnv(BlowEnv):
         # Read every step: cached per episode (a MuJoCo attribute or a mapping look-up costs ~0.1 us each).
         self._radius = float(self.model.geom("ball").size[0])
         self._rest_height = self.prediction["_rest_height"]
+        theory = self.prediction["_theory"]
+        self._x_scale = max(abs(theory.skid_distance), theory.radius)  # the length scale of the problem
 
     def _observation(self) -> np.ndarray:
         # PlanarMotion.omega_W and CueStrike.slip for one state, in Python floats (as BlowEnv._observation).
@@ -371,10 +373,9 @@ class CueStrikeEnv(BlowEnv):
         x, v, u = self.prediction["_theory"].state(t)
         return np.stack([x + self.prediction["_x_offset"], v, u], axis=1)
 
-    def _measure(self, obs: np.ndarray) -> np.ndarray:
-        return obs[[0, 2, 5]]
+    def _measure(self, obs: np.ndarray) -> list[float]:
+        x, _, v_x, _, _, slip = obs.tolist()
+        return [x, v_x, slip]
 
-    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
-        theory = self.prediction["_theory"]
-        scale = max(abs(theory.skid_distance), theory.radius)  # the length scale of the problem
-        return float(abs(measured[0] - predicted[0]) / scale)
+    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+        return abs(measured[0] - predicted[0]) / self._x_scale

@@ -142,6 +142,7 @@ class BlowEnv(ScenarioEnv):
         qpos, dof = int(self.model.jnt_qposadr[joint]), int(self.model.jnt_dofadr[joint])
         self._free_qpos, self._free_qvel = slice(qpos, qpos + 7), slice(dof, dof + 6)
         self._body_id = body.id
+        self._length = self._actual.get("length")  # a stick's full length L (m), the scale of `_pose_deviation`
         self._bind_views()
 
     def _bind_views(self) -> None:
@@ -182,14 +183,13 @@ class BlowEnv(ScenarioEnv):
         tp = np.asarray(t) - 0.5 * self.prediction["_tau"]
         return np.stack([theory.com_velocity * tp, np.zeros_like(tp), theory.angular_velocity * tp], axis=1)
 
-    def _pose_deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
-        """(|dx| + |dy|) / L + |d heading| / pi (heading difference wrapped to (-pi, pi]); 0 where the theory
-        is NaN (not scored)."""
-        if np.isnan(predicted).any():
+    def _pose_deviation(self, measured: list[float], predicted: list[float]) -> float:
+        """(|dx| + |dy|) / L + |d heading| / pi (heading difference wrapped to [-pi, pi)); 0 where the theory
+        is NaN (not scored). `measured` and `predicted` are (x, y, heading) in Python floats."""
+        if has_nan(predicted):
             return 0.0
-        dx, dy = measured[0] - predicted[0], measured[1] - predicted[1]
-        dh = (measured[2] - predicted[2] + np.pi) % (2 * np.pi) - np.pi
-        return float((abs(dx) + abs(dy)) / self.params["length"] + abs(dh) / np.pi)
+        (x, y, h), (x_p, y_p, h_p) = measured, predicted
+        return (abs(x - x_p) + abs(y - y_p)) / self._length + abs(wrap_angle(h - h_p)) / math.pi
 
 
 def heading(R_WB) -> float:
@@ -200,6 +200,19 @@ def heading(R_WB) -> float:
 def dot(a, b) -> float:
     """a . b of two 3-vectors of Python floats (a row of R_WB and a body-frame vector: one world component)."""
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def wrap_angle(angle: float) -> float:
+    """`angle` (rad) wrapped to [-pi, pi)."""
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+def has_nan(values) -> bool:
+    """Whether a theory row (Python floats) holds a NaN: a step the theory does not score."""
+    for v in values:
+        if v != v:
+            return True
+    return False
 
 
 def require_strike_on_stick(offset: float, length: float) -> None:
