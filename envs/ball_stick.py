@@ -20,7 +20,7 @@ import numpy as np
 
 from rigidbench import contact
 from rigidbench.analytic import percussion
-from rigidbench.envs.planar import BlowEnv, PlanarMotion, body_state, free_body_motion
+from rigidbench.envs.planar import BlowEnv, PlanarMotion, body_state, free_body_motion, has_nan
 from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
@@ -216,14 +216,17 @@ class BallStickEnv(BlowEnv):
         out[(t > hit) & (t < hit + self.prediction["_t_contact"])] = np.nan  # inside the contact: not scored
         return out
 
-    def _measure(self, obs: np.ndarray) -> np.ndarray:
-        return obs[[3, 5]]
+    def _load(self, case: str, params) -> None:
+        super()._load(case, params)
+        stick = self.prediction["_theory"].stick  # the deviation's scales, read every step: cached per episode
+        self._v_scale, self._omega_scale = stick.com_velocity, abs(stick.angular_velocity)
 
-    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
-        if np.isnan(predicted).any():
+    def _measure(self, obs: np.ndarray) -> list[float]:
+        _, _, _, v_x, _, omega_z = obs.tolist()
+        return [v_x, omega_z]
+
+    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+        if has_nan(predicted):
             return 0.0
-        stick = self.prediction["_theory"].stick
-        return float(
-            abs(measured[0] - predicted[0]) / stick.com_velocity
-            + abs(measured[1] - predicted[1]) / abs(stick.angular_velocity)
-        )
+        (v_x, omega_z), (v_x_theory, omega_z_theory) = measured, predicted
+        return abs(v_x - v_x_theory) / self._v_scale + abs(omega_z - omega_z_theory) / self._omega_scale

@@ -31,9 +31,9 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-from rigidbench import contact, pulse, signals
+from rigidbench import contact, frames, pulse, signals
 from rigidbench.analytic import percussion
-from rigidbench.envs.planar import BlowEnv, PlanarMotion, free_body_motion
+from rigidbench.envs.planar import BlowEnv, PlanarMotion, dot, free_body_motion
 from rigidbench.params import (
     ActuatorGear,
     GeomFriction,
@@ -349,14 +349,23 @@ class CueStrikeEnv(BlowEnv):
     def _action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_force, self.max_force, shape=(2,), dtype=np.float64)
 
-    def _observation(self) -> np.ndarray:
-        s = self._state()
-        slip = CueStrike.slip(self.model, s)[0]
-        height = s.com_W[0, 2] - self.prediction["_rest_height"]
-        return np.array([s.com_W[0, 0], height, s.v_W[0, 0], s.v_W[0, 2], s.omega_W[0, 1], slip])
+    def _load(self, case: str, params) -> None:
+        super()._load(case, params)
+        # Read every step: cached per episode (a MuJoCo attribute or a mapping look-up costs ~0.1 us each).
+        self._radius = float(self.model.geom("ball").size[0])
+        self._rest_height = self.prediction["_rest_height"]
+        theory = self.prediction["_theory"]
+        self._x_scale = max(abs(theory.skid_distance), theory.radius)  # the length scale of the problem
 
-    def _apply_action(self, action: np.ndarray) -> None:
-        self.data.xfrc_applied[self.model.body(self.body).id] = [action[0], 0.0, 0.0, 0.0, action[1], 0.0]
+    def _observation(self) -> np.ndarray:
+        # PlanarMotion.omega_W and CueStrike.slip for one state, in Python floats (as BlowEnv._observation).
+        (x, _, z, q_w, q_x, q_y, q_z), (v_x, _, v_z, w_x, w_y, w_z) = self._free_joint()
+        omega_y = dot(frames.matrix_rows(q_w, q_x, q_y, q_z)[1], (w_x, w_y, w_z))
+        return np.array([x, z - self._rest_height, v_x, v_z, omega_y, v_x - self._radius * omega_y])
+
+    def _wrench(self, action: list[float]) -> tuple[float, ...]:
+        f_x, tau_y = action
+        return f_x, 0.0, 0.0, 0.0, tau_y, 0.0
 
     observables = ("x", "v_x", "slip")
 
@@ -364,10 +373,9 @@ class CueStrikeEnv(BlowEnv):
         x, v, u = self.prediction["_theory"].state(t)
         return np.stack([x + self.prediction["_x_offset"], v, u], axis=1)
 
-    def _measure(self, obs: np.ndarray) -> np.ndarray:
-        return obs[[0, 2, 5]]
+    def _measure(self, obs: np.ndarray) -> list[float]:
+        x, _, v_x, _, _, slip = obs.tolist()
+        return [x, v_x, slip]
 
-    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
-        theory = self.prediction["_theory"]
-        scale = max(abs(theory.skid_distance), theory.radius)  # the length scale of the problem
-        return float(abs(measured[0] - predicted[0]) / scale)
+    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+        return abs(measured[0] - predicted[0]) / self._x_scale

@@ -226,8 +226,8 @@ class MarbleShotEnv(BlowEnv):
         pose[np.asarray(t) >= self.prediction["_t_first_hit"]] = np.nan  # not scored after the first collision
         return pose
 
-    def _measure(self, obs: np.ndarray) -> np.ndarray:
-        return obs[:3]
+    def _measure(self, obs: np.ndarray) -> list[float]:
+        return obs.tolist()[:3]
 
-    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
         return self._pose_deviation(measured, predicted)

@@ -17,6 +17,7 @@ Conventions: THEORY.md section 6 and P4: the stick lies along +y from the pivot;
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -25,7 +26,7 @@ import numpy as np
 
 from rigidbench import pulse
 from rigidbench.analytic import percussion
-from rigidbench.envs.planar import BlowEnv, free_body_motion
+from rigidbench.envs.planar import BlowEnv, free_body_motion, wrap_angle
 from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
@@ -215,9 +216,10 @@ class PivotedStickEnv(BlowEnv):
         tp = np.asarray(t) - 0.5 * self.prediction["_tau"]
         return np.stack([self.prediction["angular-velocity"] * tp, np.zeros_like(tp)], axis=1)
 
-    def _measure(self, obs: np.ndarray) -> np.ndarray:
-        return np.array([obs[2], np.hypot(obs[0], obs[1])])
+    def _measure(self, obs: np.ndarray) -> list[float]:
+        x, y, heading = obs.tolist()[:3]
+        return [heading, math.hypot(x, y)]
 
-    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
-        dh = (measured[0] - predicted[0] + np.pi) % (2 * np.pi) - np.pi
-        return float(abs(dh) / np.pi + measured[1] / self.params["length"])
+    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+        (heading, drift), (heading_theory, _) = measured, predicted
+        return abs(wrap_angle(heading - heading_theory)) / math.pi + drift / self._length

@@ -250,8 +250,8 @@ class StruckStickEnv(BlowEnv):
     def _theory(self, t: np.ndarray) -> np.ndarray:
         return self._stick_pose_theory(t)
 
-    def _measure(self, obs: np.ndarray) -> np.ndarray:
-        return obs[:3]
+    def _measure(self, obs: np.ndarray) -> list[float]:
+        return obs.tolist()[:3]
 
-    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
+    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
         return self._pose_deviation(measured, predicted)

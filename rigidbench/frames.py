@@ -35,16 +35,22 @@ def quat_to_matrix(quat: np.ndarray) -> np.ndarray:
 
 
 def _quat_to_matrix_one(w: float, x: float, y: float, z: float) -> np.ndarray:
-    # The operations of the vectorised path in the same order (numpy sums the 4 squares left to right), so the
-    # same bits: tests/test_performance.py checks it.
+    return np.array(matrix_rows(w, x, y, z))
+
+
+def matrix_rows(w: float, x: float, y: float, z: float) -> tuple[tuple[float, float, float], ...]:
+    """R_WB of one quaternion (w, x, y, z), normalised first, as three rows of Python floats: `quat_to_matrix`
+    for a single state (an env step) without arrays.
+
+    The operations of the vectorised path in the same order (numpy sums the 4 squares left to right), so the
+    same bits: tests/test_performance.py checks it.
+    """
     n = math.sqrt(w * w + x * x + y * y + z * z)
     w, x, y, z = w / n, x / n, y / n, z / n
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
+    return (
+        (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
+        (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
+        (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
     )
 
 

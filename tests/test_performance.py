@@ -178,3 +178,150 @@ def test_idle_stages_finds_what_can_collide_or_constrain():
     for slug, disabled in (("pendulum", ("contact", "constraint")), ("hard-spheres", ())):
         scenario = registry.get(slug)
         assert read_settings(scenario.build(scenario.resolve(scenario.cases[0])))["disabled"] == disabled
+
+
+# ---- the percussion envs (rigidbench.envs.planar.BlowEnv): float fast paths against the PlanarMotion arrays ----
+
+PERCUSSION_ENVS = {
+    "rigidbench/StruckStick-v0": {"length": 1.7},
+    "rigidbench/BallStick-v0": {"length": 1.7},
+    "rigidbench/MarbleShot-v0": {"length": 1.7},
+    "rigidbench/CueStrike-v0": {"mu": 0.3},
+    "rigidbench/CushionRebound-v0": {"mu": 0.3},
+    "rigidbench/PivotedStick-v0": {"length": 1.7},
+}
+
+
+def _percussion_reference_observation(env):
+    """`BlowEnv._observation` (and `CueStrikeEnv._observation`) as it was before the float fast path (issue 8):
+    `PlanarMotion`'s numpy arrays for the current state."""
+    from rigidbench.envs.cue_strike import CueStrike, CueStrikeEnv
+    from rigidbench.envs.planar import body_state
+
+    s = body_state(env.model, env.data, env.body)
+    if isinstance(env, CueStrikeEnv):
+        slip = CueStrike.slip(env.model, s)[0]
+        height = s.com_W[0, 2] - env.prediction["_rest_height"]
+        return np.array([s.com_W[0, 0], height, s.v_W[0, 0], s.v_W[0, 2], s.omega_W[0, 1], slip])
+    return np.array([*s.com_W[0, :2], s.heading[0], *s.v_W[0, :2], s.omega_W[0, 2]])
+
+
+def _percussion_reference_measure(env, obs):
+    from rigidbench.envs.ball_stick import BallStickEnv
+    from rigidbench.envs.cue_strike import CueStrikeEnv
+    from rigidbench.envs.pivoted_stick import PivotedStickEnv
+
+    if isinstance(env, CueStrikeEnv):
+        return obs[[0, 2, 5]]
+    if isinstance(env, BallStickEnv):
+        return obs[[3, 5]]
+    if isinstance(env, PivotedStickEnv):
+        return np.array([obs[2], np.hypot(obs[0], obs[1])])
+    return obs[:3]
+
+
+def _percussion_reference_deviation(env, measured, predicted):
+    from rigidbench.envs.ball_stick import BallStickEnv
+    from rigidbench.envs.cue_strike import CueStrikeEnv
+    from rigidbench.envs.pivoted_stick import PivotedStickEnv
+
+    measured, predicted = np.asarray(measured), np.asarray(predicted)
+    if isinstance(env, CueStrikeEnv):
+        theory = env.prediction["_theory"]
+        return float(abs(measured[0] - predicted[0]) / max(abs(theory.skid_distance), theory.radius))
+    if isinstance(env, PivotedStickEnv):
+        dh = (measured[0] - predicted[0] + np.pi) % (2 * np.pi) - np.pi
+        return float(abs(dh) / np.pi + measured[1] / env.params["length"])
+    if np.isnan(predicted).any():
+        return 0.0
+    if isinstance(env, BallStickEnv):
+        stick = env.prediction["_theory"].stick
+        return float(
+            abs(measured[0] - predicted[0]) / stick.com_velocity
+            + abs(measured[1] - predicted[1]) / abs(stick.angular_velocity)
+        )
+    dx, dy = measured[0] - predicted[0], measured[1] - predicted[1]
+    dh = (measured[2] - predicted[2] + np.pi) % (2 * np.pi) - np.pi
+    return float((abs(dx) + abs(dy)) / env.params["length"] + abs(dh) / np.pi)
+
+
+def _reference_wrench(env, action):
+    from rigidbench.envs.cue_strike import CueStrikeEnv
+
+    a = np.clip(action, env.action_space.low, env.action_space.high)
+    return [a[0], 0.0, 0.0, 0.0, a[1], 0.0] if isinstance(env, CueStrikeEnv) else [a[0], a[1], 0.0, 0.0, 0.0, a[2]]
+
+
+# The pose deviations wrap a heading difference d as (d + pi) % 2 pi - pi, exact only to an ulp of pi: a heading
+# one ulp apart (math.atan2 against numpy's arctan2, whose SIMD loops on AVX-512 differ from libm by <= 1 ulp)
+# may move the deviation by ulp(pi) / pi = 1.4e-16 however small it is. The end-to-end reward is compared to that.
+WRAP_ATOL = 2 * np.spacing(np.pi) / np.pi
+
+
+@pytest.mark.parametrize("percussion_env_id", list(PERCUSSION_ENVS))
+def test_percussion_float_paths_equal_the_planar_motion_arrays(percussion_env_id):
+    """Observation, reward and info of every percussion env over every case (plus one with other parameters),
+    under zero, random, boundary and out-of-range actions, against the numpy/PlanarMotion hooks they replaced:
+    observation and measured observables to within a few ulps (rtol 1e-14), the deviation bit for bit from the
+    same measured values (and end to end to rtol 1e-14 plus `WRAP_ATOL`), the wrench in xfrc_applied bit for bit."""
+    env = gym.make(percussion_env_id).unwrapped
+    rng = np.random.default_rng(8)
+    high = env.action_space.high
+    episodes = [{"case": c.name} for c in env.scenario.cases] + [{"params": PERCUSSION_ENVS[percussion_env_id]}]
+    worst_rel, worst_abs = 0.0, 0.0
+
+    def check(obs, reward, info):
+        nonlocal worst_rel, worst_abs
+        ref_obs = _percussion_reference_observation(env)
+        ref_measured = _percussion_reference_measure(env, ref_obs)
+        measured, predicted = list(info["measured"].values()), list(info["predicted"].values())
+        assert all(type(v) is float for v in measured)
+        got, want = np.array([*obs, *measured]), np.array([*ref_obs, *ref_measured])
+        np.testing.assert_allclose(got, want, rtol=1e-14, atol=0)
+        differ = got != want
+        worst_rel = max(worst_rel, float(np.max(np.abs(got - want)[differ] / np.abs(want[differ]), initial=0.0)))
+        # The deviation's own arithmetic: the same bits from the same measured values ...
+        assert info["deviation"] == _percussion_reference_deviation(env, measured, predicted) == -reward
+        # ... and end to end, from the reference observation.
+        ref_deviation = _percussion_reference_deviation(env, ref_measured, predicted)
+        assert info["deviation"] == pytest.approx(ref_deviation, rel=1e-14, abs=WRAP_ATOL)
+        worst_abs = max(worst_abs, abs(info["deviation"] - ref_deviation))
+
+    for seed, options in enumerate(episodes):
+        obs, info = env.reset(seed=seed, options=options)
+        check(obs, info["reward_deviation"], info)
+        for k in range(300):
+            kind = k % 4
+            if kind == 0:
+                action = np.zeros(high.shape)
+            elif kind == 1:
+                action = rng.uniform(-high, high)
+            elif kind == 2:
+                action = rng.uniform(-5 * high, 5 * high)  # mostly out of range: clipped
+            else:
+                action = rng.choice([-1.0, 1.0], size=high.shape) * high
+            obs, reward, terminated, truncated, info = env.step(action)
+            assert not terminated
+            check(obs, reward, info)
+            np.testing.assert_array_equal(
+                env.data.xfrc_applied[env.model.body(env.body).id], _reference_wrench(env, action)
+            )
+            if truncated:
+                break
+    print(
+        f"\n{percussion_env_id}: largest difference from the PlanarMotion reference: observation and measured "
+        f"{worst_rel:.1e} relative, deviation {worst_abs:.1e} absolute"
+    )
+
+
+def test_blow_env_views_follow_a_replaced_data():
+    """rigidbench.suite binds a percussion env to dm_control's MjData: observation and wrench must follow it."""
+    env = gym.make("rigidbench/StruckStick-v0").unwrapped
+    env.reset(seed=0)
+    other = mujoco.MjData(env.model)
+    other.qpos[:7] = [0.5, -0.25, 0.0, 1.0, 0.0, 0.0, 1.0]  # turned by pi/2 about z (normalised by the env)
+    other.qvel[:6] = [1.0, 2.0, 0.0, 0.0, 0.0, 3.0]
+    env.data = other
+    np.testing.assert_allclose(env._observation(), [0.5, -0.25, np.pi / 2, 1.0, 2.0, 3.0], rtol=1e-15)
+    env._apply_action(np.array([0.01, 0.02, 0.03]))
+    np.testing.assert_array_equal(other.xfrc_applied[env.model.body("stick").id], [0.01, 0.02, 0, 0, 0, 0.03])
