@@ -39,13 +39,14 @@ def loop(env_id: str, steps: int) -> None:
 
 
 def top_lines(raw: pathlib.Path, root: str = "step") -> tuple[int, list[tuple[str, int]]]:
-    """Samples under the outermost frame whose function name ends with `root`, by the line they were executing."""
+    """Samples under a frame of a function or method named `root` (``step``, ``ScenarioEnv.step``; not ``rk_step``, the
+    ODE solver a reset may run), by the line they were executing."""
     counts: collections.Counter[str] = collections.Counter()
     total = 0
     for line in raw.read_text().splitlines():
         stack, _, n = line.rpartition(" ")
         frames = stack.split(";")
-        inside = [i for i, f in enumerate(frames) if f.split(" (")[0].endswith(root)]
+        inside = [i for i, f in enumerate(frames) if f.split(" (")[0].rpartition(".")[2] == root]
         if not inside:
             continue
         total += int(n)
