@@ -15,6 +15,7 @@ along +y; LAB angles are measured from +x.
 from __future__ import annotations
 
 import copy
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -514,12 +515,39 @@ class HardSpheresEnv(ScenarioEnv):
     def _action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_force, self.max_force, shape=(3,), dtype=np.float64)
 
+    def _load(self, case: str, params) -> None:
+        super()._load(case, params)
+        # Read or written every step (issue 8): the joints' addresses (`HardSpheres._state` looks four up by name,
+        # ~0.4 us each), the projectile's id and the contact distance a, cached here; views into `self.data`
+        # (`_bind_views`).
+        model = self.model
+        adr = {name: model.joint(name).id for name in ("projectile", "target")}
+        self._slices = tuple(
+            (array, slice(int(start[adr[name]]), int(start[adr[name]]) + 3))
+            for array, start in (("qpos", model.jnt_qposadr), ("qvel", model.jnt_dofadr))
+            for name in ("projectile", "target")
+        )
+        self._body_id = model.body("projectile").id
+        self._a = float(self.prediction["_a"])
+        self._bind_views()
+
+    def _bind_views(self) -> None:
+        """Views into `self.data` read and written every step (x1, x2, v1, v2 and the projectile's force), rebuilt
+        whenever `self.data` is another MjData (the dm_control view rebinds it), as `BlowEnv` does."""
+        data = self.data
+        self._obs_views = tuple(getattr(data, array)[where] for array, where in self._slices)
+        self._force = data.xfrc_applied[self._body_id, :3]
+        self._views_of = data
+
     def _observation(self) -> np.ndarray:
-        s = HardSpheres._state(self.model, self.data.qpos, self.data.qvel)
-        return np.concatenate([s["x1"], s["x2"], s["v1"], s["v2"]])
+        if self._views_of is not self.data:
+            self._bind_views()
+        return np.concatenate(self._obs_views)  # [x1, x2, v1, v2], as `HardSpheres._state` slices them
 
     def _apply_action(self, action: np.ndarray) -> None:
-        self.data.xfrc_applied[self.model.body("projectile").id, :3] = action
+        if self._views_of is not self.data:
+            self._bind_views()
+        self._force[:] = action
 
     # Observables compared with theory: the relative position r = x1 - x2 (m), world frame.
     observables: ClassVar[tuple[str, ...]] = ("r_x", "r_y", "r_z")
@@ -535,8 +563,14 @@ class HardSpheresEnv(ScenarioEnv):
         r, _ = self._motion(np.atleast_1d(np.asarray(t, dtype=float)) - p["_t0"])
         return r.T
 
-    def _measure(self, obs: np.ndarray) -> np.ndarray:
-        return obs[0:3] - obs[3:6]
+    def _measure(self, obs: np.ndarray) -> list[float]:
+        # r = x1 - x2 in Python floats: the same subtractions as obs[0:3] - obs[3:6], without an array per step.
+        o = obs.tolist()
+        return [o[0] - o[3], o[1] - o[4], o[2] - o[5]]
 
-    def _deviation(self, measured: np.ndarray, predicted: np.ndarray) -> float:
-        return float(np.linalg.norm(measured - predicted) / self.prediction["_a"])
+    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+        # |m - p| / a over three Python floats: np.linalg.norm's sqrt(dot) for three components, without its
+        # temporaries (equal to it, or an ulp apart where BLAS's dot rounds otherwise; tests/test_performance.py).
+        (m1, m2, m3), (p1, p2, p3) = measured, predicted
+        d1, d2, d3 = m1 - p1, m2 - p2, m3 - p3
+        return math.sqrt(d1 * d1 + d2 * d2 + d3 * d3) / self._a

@@ -325,3 +325,76 @@ def test_blow_env_views_follow_a_replaced_data():
     np.testing.assert_allclose(env._observation(), [0.5, -0.25, np.pi / 2, 1.0, 2.0, 3.0], rtol=1e-15)
     env._apply_action(np.array([0.01, 0.02, 0.03]))
     np.testing.assert_array_equal(other.xfrc_applied[env.model.body("stick").id], [0.01, 0.02, 0, 0, 0, 0.03])
+
+
+# ---- HardSpheres-v0 and TopPrecession-v0 (issue 8): cached views and float paths against the hooks they replaced ----
+
+
+def _random_actions(rng, high, n):
+    """Zero, in-range, mostly out-of-range (clipped) and boundary actions, in turn."""
+    for k in range(n):
+        kind = k % 4
+        if kind == 0:
+            yield np.zeros(high.shape)
+        elif kind == 1:
+            yield rng.uniform(-high, high)
+        elif kind == 2:
+            yield rng.uniform(-5 * high, 5 * high)
+        else:
+            yield rng.choice([-1.0, 1.0], size=high.shape) * high
+
+
+def _hard_spheres_reference(env):
+    """`HardSpheresEnv`'s observation, measured r and deviation as they were before the fast path (issue 8):
+    `HardSpheres._state`'s slices looked up by name, numpy's subtraction and norm."""
+    from rigidbench.envs.hard_spheres import HardSpheres
+
+    s = HardSpheres._state(env.model, env.data.qpos, env.data.qvel)
+    obs = np.concatenate([s["x1"], s["x2"], s["v1"], s["v2"]])
+    measured = obs[0:3] - obs[3:6]
+    return obs, measured, lambda predicted: float(np.linalg.norm(measured - predicted) / env.prediction["_a"])
+
+
+def test_hard_spheres_fast_paths_equal_the_numpy_hooks():
+    """Observation, measured r and deviation of HardSpheres-v0 (frame_skip 1 and the default 40) over every case
+    and one with other parameters, under zero, random, boundary and out-of-range actions: the observation, r and
+    the applied force bit for bit; the deviation (math.sqrt of three squares against numpy's norm, whose BLAS dot
+    may round otherwise) to rtol 1e-14."""
+    worst = 0.0
+    for frame_skip in (1, 40):
+        env = gym.make("rigidbench/HardSpheres-v0", frame_skip=frame_skip).unwrapped
+        rng = np.random.default_rng(8)
+        high = env.action_space.high
+        episodes = [{"case": c.name} for c in env.scenario.cases] + [{"params": {"b": 0.013, "m1": 2.0}}]
+        for seed, options in enumerate(episodes):
+            obs, info = env.reset(seed=seed, options=options)
+            for k, action in enumerate(_random_actions(rng, high, 400 if frame_skip == 1 else 60)):
+                if k:
+                    obs, reward, terminated, truncated, info = env.step(action)
+                    assert not terminated and reward == -info["deviation"]
+                    np.testing.assert_array_equal(
+                        env.data.xfrc_applied[env.model.body("projectile").id], [*np.clip(action, -high, high), 0, 0, 0]
+                    )
+                ref_obs, ref_measured, ref_deviation = _hard_spheres_reference(env)
+                np.testing.assert_array_equal(obs, ref_obs)
+                assert list(info["measured"].values()) == ref_measured.tolist()
+                predicted = np.array(list(info["predicted"].values()))
+                want = ref_deviation(predicted)
+                assert info["deviation"] == pytest.approx(want, rel=1e-14, abs=0)
+                if want:
+                    worst = max(worst, abs(info["deviation"] - want) / want)
+                if k and truncated:
+                    break
+    print(f"\nHardSpheres-v0: largest relative difference of the deviation from numpy's norm: {worst:.1e}")
+
+
+def test_hard_spheres_views_follow_a_replaced_data():
+    env = gym.make("rigidbench/HardSpheres-v0").unwrapped
+    env.reset(seed=0)
+    other = mujoco.MjData(env.model)
+    other.qpos[:] = np.arange(env.model.nq)
+    env.data = other
+    ref_obs, _, _ = _hard_spheres_reference(env)
+    np.testing.assert_array_equal(env._observation(), ref_obs)
+    env._apply_action(np.array([0.1, 0.2, 0.3]))
+    np.testing.assert_array_equal(other.xfrc_applied[env.model.body("projectile").id], [0.1, 0.2, 0.3, 0, 0, 0])
