@@ -67,6 +67,7 @@ class TaskEnv(ScenarioEnv):
 
     def __init__(self, *, params: Mapping[str, Any] | None = None, regret: bool = True, **kwargs) -> None:
         self._with_regret = bool(regret)
+        self._reward_keys = tuple(f"reward_{name}" for name in self.reward_terms)  # info's keys, built once
         self.target: dict[str, float] = {}
         super().__init__(case=self.task_case, params=params, **kwargs)
 
@@ -141,12 +142,14 @@ class TaskEnv(ScenarioEnv):
         diverged = bool(outcome.get("diverged", False))
         if diverged:
             terms = self._diverged_terms()
-        reward = float(sum(terms[name] for name in self.reward_terms))
-        info = {f"reward_{name}": float(terms[name]) for name in self.reward_terms}
+        names = self.reward_terms
+        reward = float(sum(terms[name] for name in names))
+        info = {key: float(terms[name]) for key, name in zip(self._reward_keys, names)}  # noqa: B905 (same tuple)
         info.update(regret=reference - reward, target=dict(self.target), time=float(self.data.time), diverged=diverged)
-        info.update(outcome)
+        if outcome:
+            info.update(outcome)
         terminated, truncated = (True, False) if diverged else self._episode_end()
-        obs = self._observation()
+        obs = self._observed()
         if diverged:
             obs = np.clip(
                 np.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0),
@@ -156,6 +159,10 @@ class TaskEnv(ScenarioEnv):
         return obs, reward, terminated, truncated, info
 
     # ---- internals --------------------------------------------------------------------------------------
+
+    def _observed(self) -> np.ndarray:
+        """The observation after `_advance` (the state it left); read afresh unless the task kept it."""
+        return self._observation()
 
     def _theory(self, t: np.ndarray) -> np.ndarray:
         return np.empty((len(t), 0))  # a task compares outcomes with its target, not a trajectory with theory
@@ -209,9 +216,14 @@ class ClosedLoopTask(TaskEnv):
 
     def _outcome(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
         self._k += 1
-        if self._diverged(self._observation()):
+        # Kept for `_finish` (issue 8): the step's observation is this one, not a second read of the same state.
+        obs = self._last_observation = self._observation()
+        if self._diverged(obs):
             return {}, {"diverged": True}
         return self._terms(action), {}
+
+    def _observed(self) -> np.ndarray:
+        return self._last_observation
 
     def _episode_end(self) -> tuple[bool, bool]:
         return False, self._k >= self._nsteps

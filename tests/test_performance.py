@@ -398,3 +398,74 @@ def test_hard_spheres_views_follow_a_replaced_data():
     np.testing.assert_array_equal(env._observation(), ref_obs)
     env._apply_action(np.array([0.1, 0.2, 0.3]))
     np.testing.assert_array_equal(other.xfrc_applied[env.model.body("projectile").id], [0.1, 0.2, 0.3, 0, 0, 0])
+
+
+def _top_precession_reference_terms(env):
+    """`TopPrecessionEnv._terms` as it was before the float path (issue 8): `_state`'s full dict, then the
+    relative errors."""
+    s = env._state()
+    target = env.target
+    rate = abs(s["phi_dot"] - target["precession"]) / abs(target["precession"])
+    tilt = abs(s["theta"] - target["tilt"]) / target["tilt"]
+    return {"rate": -min(rate, 10.0), "tilt": -min(tilt, 10.0)}
+
+
+def _top_precession_reference_rollout(env):
+    """The baseline's rewards from the current (initial) state, simulated as `ClosedLoopTask._reference_rewards`
+    did, with the reference terms, on a copy of the MjData."""
+    own = env.data
+    env.data = mujoco.MjData(env.model)
+    mujoco.mj_copyData(env.data, env.model, own)
+    body = env.model.body("top").id
+    rewards = []
+    try:
+        for _ in range(env._nsteps):
+            env.data.xfrc_applied[body, 3:6] = env.theory_action()
+            mujoco.mj_step(env.model, env.data, env.frame_skip)
+            assert np.isfinite(env.data.qvel).all()
+            rewards.append(sum(_top_precession_reference_terms(env).values()))
+    finally:
+        env.data = own
+    return rewards
+
+
+def test_top_precession_fast_paths_equal_the_state_dict():
+    """Observation, reward terms, regret and info of TopPrecession-v0 over several episodes and tilts, under zero,
+    random, boundary and out-of-range torques, against `_state`'s dict and the concatenated observation they
+    replaced, and the regret's reference rollout against one scored by the reference terms: all bit for bit
+    (the float path keeps MuJoCo's quaternion-to-matrix and numpy's matmul, the steps BLAS could round otherwise)."""
+    env = gym.make("rigidbench/TopPrecession-v0", duration=0.3).unwrapped
+    rng = np.random.default_rng(8)
+    high = env.action_space.high
+    episodes = [{}, {"target": {"tilt": 0.3}}, {"target": {"tilt": 1.2}}, {"params": {"spin": 150.0}}]
+    for seed, options in enumerate(episodes):
+        obs, info = env.reset(seed=seed, options=options)
+        assert env._reference.tolist() == _top_precession_reference_rollout(env)
+        for action in _random_actions(rng, high, env._nsteps):
+            reference = env._reference[env._k]
+            obs, reward, terminated, truncated, info = env.step(action)
+            assert not terminated
+            ref_obs = np.concatenate(
+                (env.data.qpos[:4], env.data.qvel[-3:], (env.target["precession"], env.target["tilt"]))
+            )
+            np.testing.assert_array_equal(obs, ref_obs)
+            terms = _top_precession_reference_terms(env)
+            assert {"reward_rate": terms["rate"], "reward_tilt": terms["tilt"]} == {
+                k: info[k] for k in ("reward_rate", "reward_tilt")
+            }
+            assert reward == float(sum(terms.values())) and info["regret"] == reference - reward
+            assert info["target"] == env.target and info["time"] == env.data.time and info["diverged"] is False
+            assert list(info) == ["reward_rate", "reward_tilt", "regret", "target", "time", "diverged"]
+        assert truncated
+
+
+def test_top_precession_views_follow_a_replaced_data():
+    """The theory rollout swaps `self.data` for a scratch MjData: the observation and terms must follow it."""
+    env = gym.make("rigidbench/TopPrecession-v0", duration=0.05).unwrapped
+    env.reset(seed=0)
+    other = mujoco.MjData(env.model)
+    other.qpos[:4] = [np.cos(0.2), np.sin(0.2), 0.0, 0.0]
+    other.qvel[:] = [1.0, 2.0, 100.0]
+    env.data = other
+    np.testing.assert_array_equal(env._observation()[:7], [*other.qpos[:4], 1.0, 2.0, 100.0])
+    assert env._terms(np.zeros(3)) == _top_precession_reference_terms(env)
