@@ -39,15 +39,17 @@ def loop(env_id: str, steps: int) -> None:
 
 
 def top_lines(raw: pathlib.Path, root: str = "step") -> tuple[int, list[tuple[str, int]]]:
-    """Samples under a frame of a function or method named `root` (``step``, ``ScenarioEnv.step``; not ``rk_step``, the
-    ODE solver a reset may run), by the line they were executing."""
+    """Samples under a frame of a function or method named `root` (``step``, ``ScenarioEnv.step``; not ``rk_step``)
+    that no ``reset`` frame encloses (the ODE solver a reset may run has its own ``OdeSolver.step``), by the line
+    they were executing."""
     counts: collections.Counter[str] = collections.Counter()
     total = 0
     for line in raw.read_text().splitlines():
         stack, _, n = line.rpartition(" ")
         frames = stack.split(";")
-        inside = [i for i, f in enumerate(frames) if f.split(" (")[0].rpartition(".")[2] == root]
-        if not inside:
+        names = [f.split(" (")[0].rpartition(".")[2] for f in frames]
+        outer = next((name for name in names if name in (root, "reset")), None)
+        if outer != root:
             continue
         total += int(n)
         counts[frames[-1]] += int(n)

@@ -44,8 +44,9 @@ def test_profile_summary_counts_samples_inside_env_step_by_line(tmp_path):
         "<module> (loop.py:9);OrderEnforcing.step (common.py:424);ScenarioEnv._step_info (base.py:272) 20\n"
         "<module> (loop.py:9);OrderEnforcing.step (common.py:424) 10\n"
         "<module> (loop.py:9);reset (base.py:130) 500\n"
-        "<module> (loop.py:9);reset (base.py:130);solve_ivp (ivp.py:655);rk_step (rk.py:63) 300\n"
+        "<module> (loop.py:9);reset (base.py:130);solve_ivp (ivp.py:655);OdeSolver.step (base.py:197);"
+        "rk_step (rk.py:63) 300\n"
     )
     total, lines = top_lines(raw)
-    assert total == 100  # the reset's samples (its ODE solver's rk_step included) are outside env.step
+    assert total == 100  # the reset's samples (its ODE solver's steps included) are outside env.step
     assert lines[0] == ("ScenarioEnv.step (base.py:149)", 70) and len(lines) == 3
