@@ -87,6 +87,22 @@ def test_pendulum_deviation_over_floats_equals_numpy(pendulum_env):
     assert math.isnan(env._deviation(nan, np.zeros(n)))
 
 
+@pytest.mark.parametrize("rotor_env", ["rigidbench/FreeSymmetricTop-v0", "rigidbench/FreeAsymmetricTop-v0"])
+def test_rotor_deviation_over_floats_equals_numpy(rotor_env):
+    """|omega - omega_theory| / |omega_theory| over three Python floats, against numpy's vector formula."""
+    env = gym.make(rotor_env).unwrapped
+    env.reset(seed=0)
+    rng = np.random.default_rng(2)
+    worst = 0.0
+    for _ in range(2000):
+        measured, predicted = rng.normal(size=3), rng.normal(size=3)
+        diff = measured - predicted
+        expected = float(np.sqrt(diff @ diff / (predicted @ predicted)))
+        got = env._deviation(measured.tolist(), predicted.tolist())
+        worst = max(worst, abs(got - expected) / expected)
+    assert worst <= 4e-16  # numpy's dot may sum in another order: an ulp or two at most
+
+
 def test_observation_fast_paths_equal_the_state_they_copy(env_id):
     env = gym.make(env_id).unwrapped
     env.reset(seed=0)
