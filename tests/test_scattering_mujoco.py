@@ -208,3 +208,23 @@ def test_beam_angles_match_the_soft_sphere_prediction_when_the_contact_ends_on_a
     soft = np.array([scattering.soft_sphere_cm_angle(bi, a, k, 1.0) for bi in b[hit]])
     error = np.abs(out["theta"][hit] - soft).max()
     assert bound / 3 < error <= bound
+
+
+def test_lab_angles_just_past_psi_max_count_in_the_top_bin_but_no_further():
+    """An energy error of 1e-7 moves psi_max; `limit_slack` (from a 1e-5 energy budget) absorbs that, not more."""
+    from rigidbench.envs.cross_section import limit_slack
+
+    x = 3.0
+    psi_max = scattering.max_lab_angle(x)
+    edges = np.linspace(0.0, psi_max, 21)
+    probabilities = scattering.lab_angle_probabilities(edges, 0.1, x)
+    rng = np.random.default_rng(0)
+    samples = np.interp(rng.random(20000), np.concatenate([[0.0], np.cumsum(probabilities)]), edges)
+    slack = limit_slack(psi_max, x)
+    assert 5e-6 < slack < 1e-5 and limit_slack(np.pi / 2, 1.0) == 0.0
+    past = samples.copy()
+    past[:30] = psi_max + 2.4e-6  # the worst overshoot measured (x = 3, k = 1e8, 20 steps per contact)
+    assert goodness_of_fit(past, edges, probabilities) == 0.0  # strictly, one sample past the limit fails
+    assert goodness_of_fit(past, edges, probabilities, slack=slack) > 1e-3
+    past[:30] = psi_max + 2 * slack
+    assert goodness_of_fit(past, edges, probabilities, slack=slack) == 0.0
