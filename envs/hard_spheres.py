@@ -529,24 +529,18 @@ class HardSpheresEnv(ScenarioEnv):
         )
         self._body_id = model.body("projectile").id
         self._a = float(self.prediction["_a"])
-        self._bind_views()
+        self._start_views()
 
     def _bind_views(self) -> None:
-        """Views into `self.data` read and written every step (x1, x2, v1, v2 and the projectile's force), rebuilt
-        whenever `self.data` is another MjData (the dm_control view rebinds it), as `BlowEnv` does."""
+        """x1, x2, v1, v2 and the projectile's force (`ScenarioEnv._bind_views`)."""
         data = self.data
         self._obs_views = tuple(getattr(data, array)[where] for array, where in self._slices)
         self._force = data.xfrc_applied[self._body_id, :3]
-        self._views_of = data
 
     def _observation(self) -> np.ndarray:
-        if self._views_of is not self.data:
-            self._bind_views()
         return np.concatenate(self._obs_views)  # [x1, x2, v1, v2], as `HardSpheres._state` slices them
 
     def _apply_action(self, action: np.ndarray) -> None:
-        if self._views_of is not self.data:
-            self._bind_views()
         self._force[:] = action
 
     # Observables compared with theory: the relative position r = x1 - x2 (m), world frame.

@@ -143,20 +143,16 @@ class BlowEnv(ScenarioEnv):
         self._free_qpos, self._free_qvel = slice(qpos, qpos + 7), slice(dof, dof + 6)
         self._body_id = body.id
         self._length = self._actual.get("length")  # a stick's full length L (m), the scale of `_pose_deviation`
-        self._bind_views()
+        self._start_views()
 
     def _bind_views(self) -> None:
-        """Views into `self.data` read and written every step (slicing afresh costs ~0.2 us each), rebuilt whenever
-        `self.data` is another MjData (the dm_control view rebinds it), as `RotorEnv` does."""
+        """The free joint's qpos and qvel and the body's xfrc_applied row (`ScenarioEnv._bind_views`)."""
         data = self.data
         self._qpos, self._qvel = data.qpos[self._free_qpos], data.qvel[self._free_qvel]
         self._xfrc = data.xfrc_applied[self._body_id]
-        self._views_of = data
 
     def _free_joint(self) -> tuple[list[float], list[float]]:
         """The body's free-joint qpos [x, y, z, qw, qx, qy, qz] and qvel [v_W, omega_B] now, as Python floats."""
-        if self._views_of is not self.data:
-            self._bind_views()
         return self._qpos.tolist(), self._qvel.tolist()
 
     def _observation(self) -> np.ndarray:
@@ -167,8 +163,6 @@ class BlowEnv(ScenarioEnv):
         return np.array([x, y, heading(R), v_x, v_y, dot(R[2], (w_x, w_y, w_z))])
 
     def _apply_action(self, action: np.ndarray) -> None:
-        if self._views_of is not self.data:
-            self._bind_views()
         self._xfrc[:] = self._wrench(action.tolist())
 
     def _wrench(self, action: list[float]) -> tuple[float, ...]:

@@ -135,8 +135,6 @@ class RotorEnv(ScenarioEnv):
 
     def _observation(self) -> np.ndarray:
         # MuJoCo renormalises joint quaternions every step, so qpos holds a unit quaternion already.
-        if self._views_of is not self.data:
-            self._bind_views()
         return np.concatenate(self._obs_views)
 
     def _load(self, case: str, params) -> None:
@@ -144,19 +142,15 @@ class RotorEnv(ScenarioEnv):
         adr = int(self.model.jnt_qposadr[0]) + (3 if self.model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE else 0)
         self._quat = slice(adr, adr + 4)
         self._body_id = self.model.body(self.body).id
-        self._bind_views()
+        self._start_views()
 
     def _bind_views(self) -> None:
-        """Views into `self.data` read and written every step, rebuilt whenever `self.data` is another MjData
-        (the dm_control view and the task envs' theory rollouts rebind it)."""
+        """The quaternion, the body rates and the body's applied torque (`ScenarioEnv._bind_views`)."""
         data = self.data
         self._obs_views = (data.qpos[self._quat], data.qvel[-3:])
         self._torque = data.xfrc_applied[self._body_id, 3:6]
-        self._views_of = data
 
     def _apply_action(self, action: np.ndarray) -> None:
-        if self._views_of is not self.data:
-            self._bind_views()
         self._torque[:] = action
 
 

@@ -110,8 +110,6 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
     def _observation(self) -> np.ndarray:
         # RotorEnv's views of the quaternion and body rates (issue 8: slicing afresh costs ~0.2 us each), then the
         # target; one array, filled in place.
-        if self._views_of is not self.data:
-            self._bind_views()
         quat, omega_B = self._obs_views
         target = self.target
         obs = np.empty(9)
@@ -166,8 +164,6 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
     def _tilt_and_rate(self) -> tuple[float, float]:
         """`_state`'s theta and phi_dot alone, as Python floats (every step scores them: issue 8): the same
         operations on the same values, so the same bits, without L_W and e3 that only the baseline needs."""
-        if self._views_of is not self.data:
-            self._bind_views()
         quat, omega_B = self._obs_views
         R = self._R
         mujoco.mju_quat2Mat(self._R9, quat)
