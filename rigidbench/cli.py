@@ -73,7 +73,8 @@ def _parser() -> argparse.ArgumentParser:
         help="errors over integrators x timesteps (x parameters) and the observed order of convergence",
         description="Run every check of the targets over integrators x timesteps (x swept parameter values) and "
         "fit the observed order of convergence (rule: rigidbench.sweep.observed_order). Default grid: all four "
-        "integrators x dt_ref * 2^k, k = 0..5, dt_ref the scenario model file's timestep.",
+        "integrators x dt_ref * 2^k, k = -3..9 (fewer below 0 for long cases), dt_ref the case's reference "
+        "timestep (which follows its parameters).",
     )
     p_sweep.add_argument(
         "targets", nargs="*", metavar="TARGET", help="'scenario' or 'scenario:case' (default: every scenario)"
@@ -84,7 +85,7 @@ def _parser() -> argparse.ArgumentParser:
         nargs="+",
         type=_positive_float,
         metavar="SECONDS",
-        help="default: dt_ref * 2^k, k = 0..5, per scenario",
+        help="default: dt_ref * 2^k, k = -3..9, per case",
     )
     p_sweep.add_argument(
         "--param",
@@ -107,6 +108,43 @@ def _parser() -> argparse.ArgumentParser:
         "--resume", metavar="PATH", help="skip the points already journaled in PATH (same grid) and append the rest"
     )
     p_sweep.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+    p_census = sub.add_parser(
+        "census",
+        help="draw N valid parameter sets per scenario, run them, tally passed/failed/refused/crashed",
+        description="Draw N valid parameter sets per scenario from the ranges 'rigidbench list' prints "
+        "(log-uniform, with a third of the draws near the ends of the ranges; seeded), run each under the "
+        "profile, and print per scenario: drawn, refused before simulating (by reason), passed, failed, crashed, "
+        "with a command reproducing every failing draw. Exit 0 when nothing failed or crashed, 1 otherwise.",
+    )
+    p_census.add_argument(
+        "targets", nargs="*", metavar="TARGET", help="'scenario' or 'scenario:case' (default: every scenario)"
+    )
+    p_census.add_argument("--n", type=_positive_int, default=20, help="draws per target (default 20)")
+    p_census.add_argument("--seed", type=_nonnegative_int, default=0, help="seed of the draws (default 0)")
+    p_census.add_argument("--profile", default="reference", help=f"settings profile: {', '.join(PROFILES)}")
+    p_census.add_argument("--json", metavar="PATH", help="write every draw, its verdict and the tally as JSON")
+    p_census.add_argument(
+        "--jsonl", metavar="PATH", help="journal: append each finished draw's rows as JSON lines (resumable)"
+    )
+    p_census.add_argument("--resume", metavar="PATH", help="continue the census journaled in PATH")
+    p_census.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p_census.add_argument("--jobs", type=_positive_int, metavar="N", help="cases simulated at once (default: CPUs)")
+
+    p_power = sub.add_parser(
+        "power",
+        help="the benchmark's detection limit: smallest perturbation of a simulated quantity that fails a check",
+        description="For every physical quantity of each scenario's model (body masses and inertias, g, spring "
+        "constants, friction, contact stiffness), simulate a copy scaled by 1 + delta against the prediction of "
+        "the unperturbed model, for delta = 1e-2, 1e-3, ... 1e-8 (stopping at the first delta no check catches), "
+        "and print the smallest delta detected, the checks that caught it, and the delta at which the theory "
+        "itself moves by a tolerance. Exit 0 (the table is the result).",
+    )
+    p_power.add_argument("targets", nargs="*", metavar="SCENARIO", help="scenarios (default: every scenario)")
+    p_power.add_argument("--profile", default="reference", help=f"settings profile: {', '.join(PROFILES)}")
+    p_power.add_argument("--json", metavar="PATH", help="write the limits as JSON")
+    p_power.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p_power.add_argument("--jobs", type=_positive_int, metavar="N", help="cases simulated at once (default: CPUs)")
 
     p_report = sub.add_parser(
         "report",
@@ -175,6 +213,16 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _nonnegative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text!r}")
+    return value
+
+
 def _parse_sets(items: Sequence[str]) -> dict[str, str]:
     out: dict[str, str] = {}
     for item in items:
@@ -200,6 +248,7 @@ def _parse_sweeps(items: Sequence[str], stiffness: str | None) -> dict[str, list
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from rigidbench import sweep
+    from rigidbench.runner import Interrupted
 
     if args.workers < 1:
         raise UsageError(f"--workers = {args.workers} must be >= 1")
@@ -352,10 +401,19 @@ def _cmd_list(args: argparse.Namespace) -> int:
         for p in sc.params:
             d = defaults[p.name]
             dtext = ",".join(f"{x:g}" for x in d) if isinstance(d, tuple) else f"{d:g}"
-            print(f"    {p.name:<14} [{p.unit}]  default {dtext}  range {p.valid}  {p.doc}")
+            budget = " (budget: a census draws it up to its default)" if p.budget else ""
+            print(f"    {p.name:<14} [{p.unit}]  default {dtext}  range {p.range_text()}{budget}  {p.doc}")
         print("  cases:")
         for c in sc.cases:
             print(f"    {c.name:<18} {c.doc}")
+            if c.ranges:
+                ranges = ", ".join(f"{name} in {bound}" for name, bound in c.ranges.items())
+                print(f"    {'':<18} regime: {ranges} ({c.regime})")
+        if sc.domains:
+            print("  domains (refused outside, before simulating):")
+            for d in sc.domains:
+                where = f" [cases {', '.join(d.cases)}]" if d.cases else ""
+                print(f"    {d.name}{where}: {d.text} ({d.theory})")
         print("  checks:")
         for ch in sc.checks:
             print(f"    {ch.name:<24} tol {ch.tolerance:.3g} {ch.kind:<3}  [{ch.theory}]")
@@ -378,7 +436,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     from rigidbench import journal, results, runner
 
-    previous: list[dict] = []
+    previous: dict[str, list[dict]] = {}
     journal_path = args.jsonl
     if args.resume:
         try:
@@ -396,45 +454,36 @@ def _cmd_run(args: argparse.Namespace) -> int:
         for key, value in record.header["invocation"].items():
             setattr(args, key, value)
         journal.rewrite(args.resume, record)  # drop a torn tail, if any
-        previous, journal_path = record.rows, args.resume
+        previous, journal_path = record.by_job(), args.resume
     try:  # every input is validated here, before anything is simulated
         settings = runner.settings_for(args.profile, args.integrator, args.timestep)
         jobs = runner.plan(args.targets, _parse_sets(args.sets), settings)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    done = {r["job"] for r in previous}
-    by_job = {job: [r for r in previous if r["job"] == job] for job in done}
-    todo = [job for job in jobs if job.name not in done]
     if journal_path and not args.resume:
         journal.start(journal_path, _invocation(args))
     if args.resume and not args.quiet:
-        print(f"resuming: {len(jobs) - len(todo)} of {len(jobs)} cases already done", file=sys.stderr)
-
-    def progress(i: int, n: int, job: runner.Job) -> None:
-        if not args.quiet:
-            print(f"[{i + 1}/{n}] {job.name} ...", file=sys.stderr, flush=True)
+        done = sum(job.key in previous for job in jobs)
+        print(f"resuming: {done} of {len(jobs)} cases already done", file=sys.stderr)
 
     t0 = time.perf_counter()
-    interrupted = None
-    batches = runner.execute(todo, settings, progress=progress, workers=args.jobs or runner.default_workers())
-    try:
-        for job, batch in zip(todo, batches, strict=False):
-            by_job[job.name] = batch
-            if journal_path:
-                journal.append(journal_path, job.name, batch)
-    except Interrupted as exc:
-        interrupted = exc
-    finally:
-        batches.close()  # an interrupt: cases not started are cancelled
-    rows = [_strip(r) for job in jobs for r in by_job.get(job.name, [])]
-    if interrupted is not None:
+    result = runner.run_jobs(
+        jobs,
+        settings,
+        journal_path=journal_path,
+        previous=previous,
+        progress=None if args.quiet else _progress,
+        workers=args.jobs or runner.default_workers(),
+    )
+    rows = result.ordered()
+    if result.interrupted is not None:
         print(
-            f"rigidbench: interrupted by {interrupted.name} after {len(by_job)} of {len(jobs)} cases; "
+            f"rigidbench: interrupted by {result.interrupted.name} after {len(result.rows)} of {len(jobs)} cases; "
             f"finished rows are in {journal_path or args.json or '(nowhere: use --jsonl)'}",
             file=sys.stderr,
         )
         _write(args, rows)
-        return interrupted.status
+        return result.interrupted.status
     print(results.table(rows))
     print()
     if rows:
@@ -446,20 +495,153 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK if rows and all(r["status"] == results.PASS for r in rows) else EXIT_FAIL
 
 
+def _progress(i: int, n: int, job) -> None:
+    print(f"[{i + 1}/{n}] {job.key} ...", file=sys.stderr, flush=True)
+
+
+def _cmd_census(args: argparse.Namespace) -> int:
+    import mujoco
+
+    from rigidbench import census, journal, results, runner
+
+    invocation = {
+        "command": "census",
+        "targets": list(args.targets),
+        "n": args.n,
+        "seed": args.seed,
+        "profile": args.profile,
+    }
+    previous: dict[str, list[dict]] = {}
+    journal_path = args.jsonl
+    if args.resume:
+        try:
+            record = journal.read(args.resume)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        if record.header["invocation"].get("command") != "census":
+            raise UsageError(f"journal {args.resume!r} is not a census journal")
+        if record.header["mujoco"] != mujoco.__version__:
+            raise UsageError(
+                f"journal {args.resume!r} was written with mujoco {record.header['mujoco']}, this is "
+                f"{mujoco.__version__}: results would mix versions"
+            )
+        invocation = record.header["invocation"]
+        args.targets, args.n, args.seed, args.profile = (
+            invocation["targets"],
+            invocation["n"],
+            invocation["seed"],
+            invocation["profile"],
+        )
+        journal.rewrite(args.resume, record)
+        previous, journal_path = record.by_job(), args.resume
+    try:
+        settings = runner.settings_for(args.profile)
+        if not args.quiet:
+            print("drawing and checking parameter sets ...", file=sys.stderr, flush=True)
+        draws, jobs = census.plan(args.targets, n=args.n, seed=args.seed, settings=settings)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    if journal_path and not args.resume:
+        journal.start(journal_path, invocation)
+    t0 = time.perf_counter()
+    result = runner.run_jobs(
+        jobs,
+        settings,
+        journal_path=journal_path,
+        previous=previous,
+        progress=None if args.quiet else _progress,
+        workers=args.jobs or runner.default_workers(),
+    )
+    census.settle(draws, result)
+    print(census.table(draws))
+    print(
+        f"\nmujoco {mujoco.__version__}, profile {args.profile}, seed {args.seed}, n {args.n}; "
+        f"{len(jobs)} simulated in {time.perf_counter() - t0:.1f} s"
+    )
+    if args.json:
+        doc = census.document(
+            draws, n=args.n, seed=args.seed, profile=args.profile, complete=result.interrupted is None
+        )
+        results.atomic_write(args.json, _dumps(doc))
+    if result.interrupted is not None:
+        print(f"rigidbench: census interrupted by {result.interrupted.name}", file=sys.stderr)
+        return result.interrupted.status
+    return EXIT_OK if census.clean(draws) else EXIT_FAIL
+
+
+def _cmd_power(args: argparse.Namespace) -> int:
+    import mujoco
+
+    from rigidbench import power, results, runner
+
+    try:
+        settings = runner.settings_for(args.profile)
+        pairs = power.plan(args.targets, settings)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    limits = {(sc.slug, q.name): power.Limit(sc.slug, q.name) for sc, q in pairs}
+    t0 = time.perf_counter()
+    alive = list(pairs)
+    interrupted = None
+    for delta in power.DELTAS:
+        if not alive:
+            break
+        if not args.quiet:
+            print(f"delta = {delta:.0e}: {len(alive)} quantities", file=sys.stderr, flush=True)
+        jobs = power.jobs_at(alive, delta)
+        result = runner.run_jobs(jobs, settings, workers=args.jobs or runner.default_workers())
+        caught: dict[tuple[str, str], list[str]] = {}
+        for job in jobs:
+            rows = result.rows.get(job.key, [])
+            quantity = job.variant.split("*")[0]
+            caught.setdefault((job.scenario.slug, quantity), []).extend(power.failing(rows))
+        for sc, q in alive:
+            limits[(sc.slug, q.name)].tried.append(delta)
+        alive = [(sc, q) for sc, q in alive if caught.get((sc.slug, q.name))]
+        for sc, q in alive:
+            lim = limits[(sc.slug, q.name)]
+            lim.detected, lim.caught_by = delta, caught[(sc.slug, q.name)]
+        if result.interrupted is not None:
+            interrupted = result.interrupted
+            break
+    if interrupted is None:
+        for sc, q in pairs:
+            limits[(sc.slug, q.name)].theory = power.theory_sensitivity(sc, q, settings)
+    print(power.table(list(limits.values())))
+    print(
+        f"\nmujoco {mujoco.__version__}, profile {args.profile}; deltas {power.DELTAS[0]:.0e} .. "
+        f"{power.DELTAS[-1]:.0e}; {time.perf_counter() - t0:.1f} s"
+    )
+    if args.json:
+        doc = {
+            "kind": "power",
+            "mujoco": mujoco.__version__,
+            "profile": args.profile,
+            "complete": interrupted is None,
+            "limits": [lim.record() for lim in limits.values()],
+        }
+        results.atomic_write(args.json, _dumps(doc))
+    if interrupted is not None:
+        print(f"rigidbench: power interrupted by {interrupted.name}", file=sys.stderr)
+        return interrupted.status
+    return EXIT_OK
+
+
+def _dumps(doc: dict) -> str:
+    import json
+
+    from rigidbench.results import _jsonable
+
+    return json.dumps(_jsonable(doc), indent=1) + "\n"
+
+
 def _strip(row: dict) -> dict:
     return {k: v for k, v in row.items() if k not in ("job", "job_size")}
 
 
-class Interrupted(BaseException):
-    """SIGINT or SIGTERM during a run; the exit status is 128 + the signal number."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.status = 128 + signum
-        self.name = signal.Signals(signum).name
-
-
 def _raise_interrupted(signum: int, _frame: object) -> None:
+    from rigidbench.runner import Interrupted
+
     raise Interrupted(signum)
 
 
@@ -486,8 +668,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "render":
             return _cmd_render(args)
         handlers = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
+        commands = {"sweep": _cmd_sweep, "run": _cmd_run, "census": _cmd_census, "power": _cmd_power}
         try:
-            return _cmd_sweep(args) if args.command == "sweep" else _cmd_run(args)
+            return commands[args.command](args)
         finally:
             for sig, handler in handlers.items():
                 signal.signal(sig, handler)

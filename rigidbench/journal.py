@@ -39,6 +39,13 @@ class Journal:
             sizes[row["job"]] = row["job_size"]
         return {job for job, n in counts.items() if n == sizes[job]}
 
+    def by_job(self) -> dict[str, list[dict[str, Any]]]:
+        """The rows of every complete job, by job key (what `rigidbench.runner.run_jobs` skips)."""
+        out: dict[str, list[dict[str, Any]]] = {}
+        for row in self.rows:
+            out.setdefault(row["job"], []).append(row)
+        return out
+
 
 def header(invocation: Mapping[str, Any]) -> dict[str, Any]:
     from rigidbench import __version__

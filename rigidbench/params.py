@@ -10,7 +10,7 @@ uses is what MuJoCo simulated.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -292,6 +292,28 @@ def positive(high: float) -> Range:
 
 
 @dataclass(frozen=True)
+class Bound:
+    """A range that depends on other parameters, e.g. an impact parameter in ``[0, r1 + r2)``.
+
+    Attributes
+    ----------
+    text : str
+        The range in words, as `rigidbench list` prints it, e.g. ``"[0, r1 + r2)"``.
+    range : callable
+        Resolved parameters -> the `Range` in SI units.
+    needs : tuple of str
+        The parameters it depends on (a census draws those first).
+    """
+
+    text: str
+    range: Callable[[Mapping[str, Value]], Range]
+    needs: tuple[str, ...] = ()
+
+    def __str__(self) -> str:
+        return self.text
+
+
+@dataclass(frozen=True)
 class Param:
     """One public, named scenario parameter.
 
@@ -311,6 +333,13 @@ class Param:
         Number of components (3 for a vector such as a body-frame angular velocity).
     integer : bool
         Whether each component must be a whole number (a count, e.g. the number of pendulums in a chain).
+    within : Bound, optional
+        A further range that depends on other parameters (checked by `Scenario.resolve` once every parameter
+        is known), e.g. a strike point on the stick: ``(0, L/2]``.
+    budget : bool
+        A sample count or a resolution (Monte Carlo samples, steps per contact) rather than a physical quantity:
+        larger values cost more and only tighten statistics or resolution. A census draws it between its lower
+        end and its default (`rigidbench.census`), so a census costs what a run costs.
     """
 
     name: str
@@ -320,6 +349,8 @@ class Param:
     target: Target
     size: int = 1
     integer: bool = False
+    within: Bound | None = None
+    budget: bool = False
 
     def parse(self, text: str) -> Value:
         """Parse a command-line value (``"0.3"`` or ``"0.1,5,0.1"``) and validate it.
@@ -359,6 +390,31 @@ class Param:
                     f"parameter '{self.name}' = {_fmt(value)}{unit} is outside the valid range {kind}{self.valid}{unit}"
                 )
         return _unwrap(arr)
+
+    def check_within(self, value: Value, values: Mapping[str, Value]) -> None:
+        """Check `value` against the dependent range `within`, evaluated on the resolved `values`.
+
+        Raises
+        ------
+        ValueError
+            Naming the parameter, the value and the range, in words and in numbers.
+        """
+        if self.within is None:
+            return
+        bound = self.within.range(values)
+        for x in np.ravel(value):
+            if float(x) not in bound:
+                unit = "" if self.unit == "1" else f" {self.unit}"
+                raise ValueError(
+                    f"parameter '{self.name}' = {_fmt(value)}{unit} is outside its range {self.within.text} "
+                    f"= {bound}{unit}"
+                )
+
+    def range_text(self) -> str:
+        """The valid range as `rigidbench list` prints it: the static range, and the dependent one if any."""
+        unit = "" if self.unit == "1" else f" {self.unit}"
+        text = f"{self.valid}{unit}"
+        return text if self.within is None else f"{text}, and in {self.within.text}"
 
     def _shape_words(self) -> str:
         return "a number" if self.size == 1 else f"{self.size} comma-separated numbers"

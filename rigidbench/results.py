@@ -3,7 +3,8 @@
 One row per check (DESIGN.md "Results"): scenario, case, check, unit, measured, expected, error, tolerance
 (with its kind and reason), status, settings, params, and the MuJoCo and rigidbench versions. A case whose
 simulation diverged yields a single row with status ``"diverged"``, ``passed = None`` and the time it
-happened: it is never scored against theory.
+happened: it is never scored against theory. A case whose run raised an exception (a defect of rigidbench, never
+of the physics) yields a single row with status ``"error"`` and the exception in ``message``.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import mujoco
 
 from rigidbench.scenario import CaseRun
 
-PASS, FAIL, DIVERGED = "pass", "fail", "diverged"
+PASS, FAIL, DIVERGED, ERROR = "pass", "fail", "diverged", "error"
 
 
 def rows_of(run: CaseRun) -> list[dict[str, Any]]:
@@ -114,7 +115,7 @@ def write_junit(path: str, rows: Sequence[dict[str, Any]]) -> None:
         by_scenario.setdefault(row["scenario"], []).append(row)
     for scenario, group in by_scenario.items():
         failures = sum(r["status"] == FAIL for r in group)
-        errors = sum(r["status"] == DIVERGED for r in group)
+        errors = sum(r["status"] in (DIVERGED, ERROR) for r in group)
         suite = ET.SubElement(
             suites,
             "testsuite",
@@ -122,7 +123,7 @@ def write_junit(path: str, rows: Sequence[dict[str, Any]]) -> None:
             tests=str(len(group)),
             failures=str(failures),
             errors=str(errors),
-            time=f"{sum({(r['case']): r['wall_time'] for r in group}.values()):.3f}",
+            time=f"{sum({(r['case']): r.get('wall_time') or 0.0 for r in group}.values()):.3f}",
         )
         props = ET.SubElement(suite, "properties")
         ET.SubElement(props, "property", name="mujoco", value=mujoco.__version__)
@@ -133,6 +134,8 @@ def write_junit(path: str, rows: Sequence[dict[str, Any]]) -> None:
                 ET.SubElement(case, "failure", message=_verdict_line(row)).text = row["tolerance_reason"]
             elif row["status"] == DIVERGED:
                 ET.SubElement(case, "error", message=f"simulation diverged at t = {row['diverged_at']:.6g} s")
+            elif row["status"] == ERROR:
+                ET.SubElement(case, "error", message=row["message"])
             ET.SubElement(case, "system-out").text = json.dumps(_jsonable({"params": row["params"]}))
     ET.indent(suites)
     atomic_write(path, ET.tostring(suites, encoding="unicode", xml_declaration=True) + "\n")
@@ -158,7 +161,12 @@ def table(rows: Iterable[dict[str, Any]]) -> str:
     for r in rows:
         tol = "-" if r["tolerance"] is None else f"{r['tolerance']:.3g} {r['tolerance_kind']}"
         err = "-" if r["error"] is None else f"{r['error']:.2e}"
-        verdict = f"DIVERGED at t={r['diverged_at']:.4g} s" if r["status"] == DIVERGED else r["status"].upper()
+        if r["status"] == DIVERGED:
+            verdict = f"DIVERGED at t={r['diverged_at']:.4g} s"
+        elif r["status"] == ERROR:
+            verdict = f"ERROR {r['message']}"
+        else:
+            verdict = r["status"].upper()
         lines.append(
             (
                 f"{r['scenario']}:{r['case']}",
@@ -179,5 +187,6 @@ def table(rows: Iterable[dict[str, Any]]) -> str:
 
 
 def summary(rows: Sequence[dict[str, Any]]) -> str:
-    n = {s: sum(r["status"] == s for r in rows) for s in (PASS, FAIL, DIVERGED)}
-    return f"{n[PASS]} passed, {n[FAIL]} failed, {n[DIVERGED]} diverged ({len(rows)} checks)"
+    n = {s: sum(r["status"] == s for r in rows) for s in (PASS, FAIL, DIVERGED, ERROR)}
+    errors = f", {n[ERROR]} errors" if n[ERROR] else ""
+    return f"{n[PASS]} passed, {n[FAIL]} failed, {n[DIVERGED]} diverged{errors} ({len(rows)} checks)"

@@ -9,9 +9,11 @@ the gymnasium env, the dm_env task and the tests are views of it.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import importlib.resources
+import json
 import math
 import threading
 from collections.abc import Callable, Mapping
@@ -21,14 +23,62 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
-from rigidbench.params import Param, Value, check_known
-from rigidbench.settings import Settings, read_settings, skip_idle_stages
-from rigidbench.simulate import Trajectory, simulate, steps_for
+from rigidbench.params import Bound, Param, Range, Value, check_known
+from rigidbench.settings import DERIVED_TEXT, Settings, read_settings, skip_idle_stages
+from rigidbench.simulate import Trajectory, check_run_size, simulate, steps_for
 
 Params = dict[str, Value]
 _BUILD_LOCK = threading.RLock()
 # A case value is a number, or a function of the other resolved parameters (e.g. a steady-precession rate).
 CaseValue = Value | Callable[[Mapping[str, Value]], Value]
+
+
+class OutsideDomain(ValueError):
+    """A parameter set the theory does not cover to the checks' tolerances: refused before simulating.
+
+    Attributes
+    ----------
+    domain : str
+        Short name of the violated condition (a census groups refusals by it), e.g. ``"small-oscillation"``.
+    """
+
+    def __init__(self, message: str, domain: str) -> None:
+        super().__init__(message)
+        self.domain = domain
+
+
+@dataclass(frozen=True)
+class Domain:
+    """A condition the theory of some checks needs, stated in words and tested on the resolved parameters.
+
+    Outside it the closed form does not hold to the checks' tolerances (a linearisation, an asymptotic
+    exponent, an impulsive blow), so a parameter set there is refused before anything is simulated, with a
+    message naming the parameters and the theory (`OutsideDomain`). `rigidbench list` prints every domain.
+
+    Attributes
+    ----------
+    name : str
+        Short name, e.g. ``"small-oscillation"``.
+    theory : str
+        THEORY.md entry (and seed) whose domain this is.
+    text : str
+        The condition and why, e.g. ``"|amplitude| <= 4e-3 rad: the period's amplitude shift a^2/16 stays
+        below the 1e-6 tolerance"``.
+    test : callable
+        Resolved parameters -> None inside the domain, or a phrase naming the parameters and their values
+        outside it (``"amplitude1 = 0.5 rad"``).
+    cases : tuple of str
+        The cases it applies to; empty for every case.
+    """
+
+    name: str
+    theory: str
+    text: str
+    test: Callable[[Mapping[str, Value]], str | None]
+    cases: tuple[str, ...] = ()
+
+    def applies(self, case: str) -> bool:
+        return not self.cases or case in self.cases
 
 
 @dataclass(frozen=True)
@@ -44,12 +94,36 @@ class Case:
         user's explicit ``--set`` of that parameter wins over the derivation.
     checks : tuple of str
         Names of the scenario's checks that apply to this case.
+    ranges : mapping of parameter name to `Range` or `Bound`
+        The case's regime: where its checks' theory holds (e.g. a small tilt for the linearised sleeping top).
+        Narrower than the parameter's own range; a value outside it is refused (`OutsideDomain`), and a census
+        draws inside it.
+    regime : str
+        Why the ranges are what they are (the theory and the tolerance that set them).
     """
 
     name: str
     doc: str
     values: Mapping[str, CaseValue]
     checks: tuple[str, ...]
+    ranges: Mapping[str, Range | Bound] = field(default_factory=dict)
+    regime: str = ""
+
+
+@dataclass(frozen=True)
+class Derived:
+    """A simulation setting that follows the parameters (`Scenario.reference_settings`).
+
+    Attributes
+    ----------
+    value : float
+        In SI units (a timestep or a pulse duration in s).
+    rule : str
+        How it follows from the parameters, with the numbers, e.g. ``"T0 / 3200, T0 = 2 pi sqrt(l/g) = 2.006 s"``.
+    """
+
+    value: float
+    rule: str
 
 
 @dataclass(frozen=True)
@@ -126,6 +200,19 @@ class CaseRun:
     prediction: Mapping[str, Any] | None = field(default=None, repr=False)
 
 
+@dataclass
+class Prepared:
+    """A case ready to simulate: resolved, compiled, started and predicted, with its run length checked."""
+
+    case: Case
+    params: Params
+    model: mujoco.MjModel = field(repr=False)
+    data: mujoco.MjData = field(repr=False)
+    prediction: Mapping[str, Any] = field(repr=False)
+    duration: float
+    nstep: int
+
+
 class Scenario:
     """Base class of every scenario. Subclasses set the class attributes and implement the hooks.
 
@@ -139,6 +226,8 @@ class Scenario:
     cases : tuple of Case
         The first case is the default.
     checks : tuple of Check
+    domains : tuple of Domain
+        Conditions the theory needs beyond the parameter ranges (refused before simulating).
     env_id : str or None
         Gymnasium id, e.g. ``"rigidbench/HeavyTop-v0"``; None for a scenario with no stepping env.
     """
@@ -148,12 +237,24 @@ class Scenario:
     params: ClassVar[tuple[Param, ...]]
     cases: ClassVar[tuple[Case, ...]]
     checks: ClassVar[tuple[Check, ...]]
+    domains: ClassVar[tuple[Domain, ...]] = ()
     env_id: ClassVar[str | None]
 
     # ---- hooks -------------------------------------------------------------------------------------------
 
     def validate(self, params: Mapping[str, Value]) -> None:
         """Cross-parameter validity (e.g. the inertia triangle inequality). Raise ValueError naming them."""
+
+    def reference_settings(self, params: Mapping[str, Value]) -> dict[str, Derived]:
+        """Settings that follow the parameters: ``"timestep"`` (s) from the fastest time scale and the integrator's
+        error bound for the checks' tolerances, ``"pulse_duration"`` (s) from an omega tau bound.
+
+        A derived timestep is used unless the settings give one (a profile such as ``mujoco-default``, the
+        user's ``--timestep``, a sweep point); a derived pulse duration is always used (it is part of the blow,
+        not of the integrator). Both are recorded with every result (``settings["derived"]``). Empty by default:
+        the model file's values.
+        """
+        return {}
 
     def check_model(self, model: mujoco.MjModel) -> None:
         """Validity of the compiled model under its settings (e.g. contact stiffness against the timestep).
@@ -271,8 +372,39 @@ class Scenario:
         for name, fn in derived.items():
             if name not in overrides:
                 values[name] = self.param(name).check(fn(values))
+        for p in self.params:
+            p.check_within(values[p.name], values)
         self.validate(values)
+        self.check_domain(case, values)
         return values
+
+    def check_domain(self, case: Case, values: Mapping[str, Value]) -> None:
+        """Refuse parameters outside the case's regime or a domain of the theory (`OutsideDomain`).
+
+        Raises
+        ------
+        OutsideDomain
+            Naming the parameter(s), their values, the theory and its condition.
+        """
+        for name, bound in case.ranges.items():
+            p = self.param(name)
+            interval = bound.range(values) if isinstance(bound, Bound) else bound
+            if any(float(x) not in interval for x in np.ravel(values[name])):
+                unit = "" if p.unit == "1" else f" {p.unit}"
+                where = f"{bound.text} = {interval}" if isinstance(bound, Bound) else str(interval)
+                raise OutsideDomain(
+                    f"parameter '{name}' = {_fmt(values[name])}{unit} is outside the regime of case '{case.name}', "
+                    f"{where}{unit}: {case.regime}",
+                    f"case {case.name}: {name}",
+                )
+        for domain in self.domains:
+            if not domain.applies(case.name):
+                continue
+            outside = domain.test(values)
+            if outside:
+                raise OutsideDomain(
+                    f"{outside} is outside the domain of {domain.theory} ({domain.name}): {domain.text}", domain.name
+                )
 
     def build(self, params: Mapping[str, Value], settings: Settings | None = None) -> mujoco.MjModel:
         """Compile the model with `params` applied through MjSpec and `settings` on top, with the pipeline stages
@@ -291,6 +423,7 @@ class Scenario:
             spec = self.spec()
             for p in self.params:
                 p.target.apply(spec, params[p.name])
+            self._apply_derived(spec, params, settings)
             if settings is not None:
                 settings.apply(spec)
             try:
@@ -300,6 +433,28 @@ class Scenario:
         self.check_model(model)
         skip_idle_stages(model)
         return model
+
+    def _apply_derived(self, spec: mujoco.MjSpec, params: Mapping[str, Value], settings: Settings | None) -> None:
+        """Write the settings that follow the parameters into `spec`, and their rules as the model's custom text
+        `settings.DERIVED_TEXT` (read back with the settings of every result)."""
+        from rigidbench import pulse
+
+        derived = self.reference_settings(params)
+        applied = {}
+        for name, d in derived.items():
+            if not (math.isfinite(d.value) and d.value > 0):
+                raise ValueError(f"scenario '{self.slug}': derived {name} = {d.value!r} ({d.rule}) is not positive")
+            if name == "timestep":
+                if settings is not None and settings.timestep is not None:
+                    continue  # the profile or the user fixed it
+                spec.option.timestep = d.value
+            elif name == "pulse_duration":
+                spec.numeric(pulse.PULSE_DURATION).data = [d.value]
+            else:
+                raise ValueError(f"scenario '{self.slug}': no derived setting '{name}'")
+            applied[name] = {"value": d.value, "rule": d.rule}
+        if applied:
+            spec.add_text(name=DERIVED_TEXT, data=json.dumps(applied, sort_keys=True))
 
     def read_params(self, model: mujoco.MjModel) -> Params:
         """The parameters as compiled (what is actually simulated)."""
@@ -312,23 +467,17 @@ class Scenario:
         mujoco.mj_forward(model, data)
         return data
 
-    def run(
-        self,
-        case: str | None = None,
-        overrides: Mapping[str, object] | None = None,
-        settings: Settings | None = None,
-        *,
-        keep_trajectory: bool = False,
-    ) -> CaseRun:
-        """Simulate one case and score every check it names.
+    def prepare(
+        self, case: str | None = None, overrides: Mapping[str, object] | None = None, settings: Settings | None = None
+    ) -> Prepared:
+        """Resolve, compile, start and predict one case, and check its run length, without simulating.
 
         Raises
         ------
         ValueError
-            For invalid parameters or settings (before anything is simulated).
+            For invalid parameters or settings, a set outside the theory's domain (`OutsideDomain`), or a run
+            longer than the step or memory limits (`rigidbench.simulate.check_run_size`).
         """
-        import time as _time
-
         c = self.case(case)
         params = self.resolve(c, overrides)
         model = self.build(params, settings)
@@ -336,30 +485,75 @@ class Scenario:
         data = self.start(model, actual)
         prediction = self.predict(model, data)
         duration = float(self.duration(prediction))
-        t0 = _time.perf_counter()
+        if not (math.isfinite(duration) and duration > 0):
+            raise ValueError(
+                f"scenario '{self.slug}:{c.name}': the predicted run length {duration!r} s is not positive"
+            )
         nstep = steps_for(duration, model.opt.timestep)
-        traj = self.simulate(model, data, duration, control=self.control(model, model.opt.timestep, nstep))
+        check_run_size(model, nstep)
+        return Prepared(c, actual, model, data, prediction, duration, nstep)
+
+    def run(
+        self,
+        case: str | None = None,
+        overrides: Mapping[str, object] | None = None,
+        settings: Settings | None = None,
+        *,
+        keep_trajectory: bool = False,
+        perturb: Callable[[mujoco.MjModel], None] | None = None,
+    ) -> CaseRun:
+        """Simulate one case and score every check it names.
+
+        Parameters
+        ----------
+        perturb : callable, optional
+            Edits a copy of the compiled model in place before it is simulated (`rigidbench.power`): the
+            prediction, the controls and the measurement keep the unperturbed model, so a check that fails shows
+            the benchmark can see the edit.
+
+        Raises
+        ------
+        ValueError
+            For invalid parameters or settings (before anything is simulated); see `prepare`.
+        """
+        import time as _time
+
+        prep = self.prepare(case, overrides, settings)
+        model, data, prediction = prep.model, prep.data, prep.prediction
+        control = self.control(model, model.opt.timestep, prep.nstep)
+        simulated = model
+        if perturb is not None:
+            simulated = copy.copy(model)
+            perturb(simulated)
+        t0 = _time.perf_counter()
+        traj = self.simulate(simulated, data, prep.duration, control=control)
         wall = _time.perf_counter() - t0
         outcomes = []
         if traj.diverged_at is None:
             measured = self.measure(model, traj, prediction)
             outcomes = [
                 Outcome(self._scaled_check(name, prediction), float(measured[name]), float(prediction[name]))
-                for name in c.checks
+                for name in prep.case.checks
             ]
         return CaseRun(
             scenario=self.slug,
-            case=c.name,
-            params=actual,
+            case=prep.case.name,
+            params=prep.params,
             settings=read_settings(model),
             outcomes=outcomes,
             diverged_at=traj.diverged_at,
-            duration=duration,
+            duration=prep.duration,
             nstep=len(traj.time) - 1,
             wall_time=wall,
             trajectory=traj if keep_trajectory else None,
             prediction=prediction if keep_trajectory else None,
         )
+
+
+def _fmt(value: object) -> str:
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return ",".join(f"{float(x):g}" for x in np.ravel(value))
+    return f"{float(value):g}"
 
 
 @functools.cache

@@ -21,6 +21,7 @@ Monte Carlo sample counts: a scenario that draws samples keeps its count in ``<n
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, replace
 
 import mujoco
@@ -44,6 +45,10 @@ THOROUGH_SAMPLES = 100_000
 
 # Largest timestep accepted (s): beyond this no scenario here is meaningful, and MuJoCo accepts anything.
 MAX_TIMESTEP = 0.1
+
+# Name of the model's custom text holding the settings that followed the parameters (`Scenario.reference_settings`),
+# as JSON: {"timestep": {"value": ..., "rule": ...}, ...}; read back into every result's settings as "derived".
+DERIVED_TEXT = "rigidbench:derived"
 
 
 @dataclass(frozen=True)
@@ -176,8 +181,20 @@ def read_settings(model: mujoco.MjModel) -> dict:
         # Pipeline stages switched off (by the model file, or by `skip_idle_stages` where they can do nothing).
         "disabled": tuple(name for name, bit in STAGES.items() if model.opt.disableflags & bit),
     }
+    derived = _custom_text(model, DERIVED_TEXT)
+    if derived is not None:
+        out["derived"] = json.loads(derived)
     contact = [i for i in range(model.ngeom) if model.geom_contype[i] or model.geom_conaffinity[i]]
     if contact:
         out["solref"] = tuple(sorted({tuple(float(x) for x in model.geom_solref[i]) for i in contact}))
         out["solimp"] = tuple(sorted({tuple(float(x) for x in model.geom_solimp[i]) for i in contact}))
     return out
+
+
+def _custom_text(model: mujoco.MjModel, name: str) -> str | None:
+    """The data of the model's custom text `name`, or None if it has none."""
+    i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXT, name)
+    if i < 0:
+        return None
+    start, size = int(model.text_adr[i]), int(model.text_size[i])
+    return bytes(model.text_data[start : start + size]).rstrip(b"\0").decode()

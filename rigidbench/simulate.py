@@ -18,6 +18,9 @@ STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 
 # The longest run accepted (steps): 2e7 states of a small model is ~1.5 GB; longer runs are a mistake.
 MAX_STEPS = 20_000_000
+# The most memory one recorded trajectory may take (bytes): every state of the run is kept (`simulate`), so a run
+# of n steps of a model with s state numbers needs 8 (n + 1) s bytes. Two cases run at once on two cores.
+MAX_TRAJECTORY_BYTES = 2 * 1024**3
 
 
 @dataclass(frozen=True)
@@ -63,6 +66,22 @@ def steps_for(duration: float, timestep: float) -> int:
             "use a larger timestep or parameters with shorter time scales"
         )
     return n
+
+
+def check_run_size(model: mujoco.MjModel, nstep: int) -> None:
+    """Refuse a run whose recorded trajectory would not fit in `MAX_TRAJECTORY_BYTES`.
+
+    Raises
+    ------
+    ValueError
+        Naming the steps, the state size and the memory it would need.
+    """
+    nbytes = 8 * (nstep + 1) * mujoco.mj_stateSize(model, STATE)
+    if nbytes > MAX_TRAJECTORY_BYTES:
+        raise ValueError(
+            f"a run of {nstep} steps would record {nbytes / 1024**3:.1f} GiB of states, more than "
+            f"{MAX_TRAJECTORY_BYTES / 1024**3:.0f} GiB; use a larger timestep or parameters with shorter time scales"
+        )
 
 
 def get_state(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:

@@ -33,7 +33,8 @@ from rigidbench.settings import INTEGRATORS, MAX_TIMESTEP, Settings
 # fourth-order Runge-Kutta.
 NOMINAL_ORDER = {"Euler": 1, "implicit": 1, "implicitfast": 1, "RK4": 4}
 
-# The default timestep ladder: dt_ref * 2^k, k = k_min .. LADDER_TOP, dt_ref the model file's (reference) timestep.
+# The default timestep ladder: dt_ref * 2^k, k = k_min .. LADDER_TOP, dt_ref the case's reference timestep
+# (`reference`).
 # Going *up* from the reference step lifts the error of a high-order method off round-off (RK4 at dt_ref is
 # often at 1e-11 for the tops); nine doublings span a factor 512, i.e. 10 decades of error for a 4th-order method,
 # and cost less than one more run at dt_ref (each doubling halves the steps). Going *down* brings a first-order
@@ -292,9 +293,11 @@ def fit_orders(rows: Iterable[Mapping[str, Any]]) -> list[Order]:
 # ---- the grid ------------------------------------------------------------------------------------------------
 
 
-def reference_timestep(slug: str) -> float:
-    """The timestep (s) of the scenario's model file: its reference setting."""
-    return float(registry.get(slug).spec().compile().opt.timestep)
+def reference(slug: str, case: str, overrides: Mapping[str, Any] | None = None) -> tuple[float, float]:
+    """The reference timestep (s) of a case (its model's, or the one that follows its parameters,
+    `Scenario.reference_settings`) and its simulated time (s), predicted; nothing is simulated."""
+    prep = registry.get(slug).prepare(case, overrides)
+    return float(prep.model.opt.timestep), prep.duration
 
 
 def ladder(dt_ref: float, duration: float | None = None) -> list[float]:
@@ -307,15 +310,6 @@ def ladder(dt_ref: float, duration: float | None = None) -> list[float]:
     if duration is not None and duration > 0:
         k_min = max(LADDER_BOTTOM, min(0, -math.floor(math.log2(STEP_BUDGET * dt_ref / duration))))
     return [dt_ref * 2.0**k for k in range(k_min, LADDER_TOP + 1) if dt_ref * 2.0**k <= MAX_TIMESTEP]
-
-
-def case_duration(slug: str, case: str, overrides: Mapping[str, Any] | None = None) -> float:
-    """Simulated time (s) of a case at the model file's settings (predicted, nothing is simulated)."""
-    scenario = registry.get(slug)
-    params = scenario.resolve(scenario.case(case), overrides)
-    model = scenario.build(params)
-    data = scenario.start(model)
-    return float(scenario.duration(scenario.predict(model, data)))
 
 
 def plan(
@@ -334,7 +328,7 @@ def plan(
     integrators : sequence of str, optional
         Default: all four.
     timesteps : sequence of float, optional
-        Seconds. Default: `ladder` of each scenario's reference timestep and each case's duration.
+        Seconds. Default: `ladder` of each case's reference timestep and duration (`reference`).
     params : mapping of str to sequence of float, optional
         Parameters to sweep (SI units), e.g. ``{"stiffness": [1e5, 1e6, 1e7]}``; their values multiply the grid.
         A scenario with a ``stiffness`` parameter that is not named here sweeps it over its default x 10^(-1, 0,
@@ -369,15 +363,10 @@ def plan(
         combos: list[tuple[tuple[str, float], ...]] = [()]
         for name, values in swept.items():
             combos = [(*c, (name, float(v))) for c in combos for v in values]
-        dt_ref = reference_timestep(scenario.slug)
         for case in cases:
             for combo in combos:
                 try:
-                    steps = (
-                        list(timesteps)
-                        if timesteps
-                        else ladder(dt_ref, case_duration(scenario.slug, case, dict(combo)))
-                    )
+                    steps = list(timesteps) if timesteps else ladder(*reference(scenario.slug, case, dict(combo)))
                 except ValueError as exc:
                     raise ValueError(f"{scenario.slug}:{case}: {exc}") from None
                 for integrator in integrators:
