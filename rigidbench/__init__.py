@@ -4,6 +4,32 @@ Importing the package registers every scenario's gymnasium environment (``rigidb
 """
 
 import os as _os
+import sys as _sys
+
+
+def _cli_starting() -> bool:
+    """Whether this process is the ``rigidbench`` command starting (its console script, or ``python -m
+    rigidbench``, during whose package import ``sys.argv[0]`` is still ``-m``)."""
+    argv0 = _sys.argv[0] if _sys.argv else ""
+    return _os.path.basename(argv0) == "rigidbench" or (argv0 == "-m" and "rigidbench" in _sys.orig_argv)
+
+
+def _early_signals() -> None:
+    """Until the command line installs its own handlers (`rigidbench.cli.main`), a SIGINT or SIGTERM while the
+    command is still importing ends it with one line and 130/143, as one later does, and never a traceback."""
+    import signal
+
+    def stop(signum: int, _frame: object) -> None:
+        _os.write(2, f"rigidbench: interrupted by {signal.Signals(signum).name}\n".encode())
+        _os._exit(128 + signum)
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(sig) is not signal.SIG_IGN:
+            signal.signal(sig, stop)
+
+
+if _cli_starting():
+    _early_signals()
 
 # MuJoCo picks its OpenGL backend when it is first imported: default to EGL on a machine with no display.
 if "MUJOCO_GL" not in _os.environ and not _os.environ.get("DISPLAY"):

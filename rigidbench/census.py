@@ -251,8 +251,7 @@ def plan(targets: Sequence[str], *, n: int, seed: int, settings: Settings | None
             draws.append(d)
             try:
                 d.params = draw(scenario, case, rng)
-                job = Job(scenario, case.name, d.params, variant=f"census {i}")
-                check_job(job, settings)
+                job = check_job(Job(scenario, case.name, d.params, variant=f"census {i}"), settings)
             except OutsideDomain as exc:
                 d.status, d.reason, d.message = REFUSED, exc.domain, str(exc)
             except ValueError as exc:

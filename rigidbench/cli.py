@@ -1,17 +1,21 @@
 """The ``rigidbench`` command line.
 
-Exit status: 0 when every check passed; 1 when any check failed or a simulation diverged; 2 for bad usage
-(one line on stderr naming the problem, no traceback); 130 when interrupted by Ctrl-C (SIGINT), 143 by SIGTERM,
-after writing every finished row (``--jsonl`` journals them as they finish; ``--resume`` continues).
+Exit status (README "CI"): 0 when every check passed; 1 when any check failed, a simulation diverged or a case
+raised an error (each in its row); 2 for bad usage, a parameter set outside the theory's domain, an output that
+cannot be written or a journal that cannot be used (one line on stderr naming it, no traceback); 130 when
+interrupted by Ctrl-C (SIGINT), 143 by SIGTERM, after writing every finished row (``--jsonl`` journals them as
+they finish, ``--resume`` continues; ``--json`` and ``--junit`` say the run is incomplete).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import signal
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any, TextIO
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 
@@ -98,7 +102,11 @@ def _parser() -> argparse.ArgumentParser:
     p_sweep.add_argument(
         "--stiffness", metavar="K1,K2,...", help="shorthand for --param stiffness=K1,K2,... (contact scenarios)"
     )
-    p_sweep.add_argument("--workers", type=int, default=2, help="worker processes (default 2; 1 = in process)")
+    p_sweep.add_argument(
+        "--workers",
+        type=_positive_int,
+        help="worker processes (default: the CPUs available, at most that many; 1 = in process)",
+    )
     p_sweep.add_argument("--errors", action="store_true", help="also print the error at every grid point")
     p_sweep.add_argument("--json", metavar="PATH", help="write every point's rows and the fitted orders as JSON")
     p_sweep.add_argument(
@@ -247,72 +255,92 @@ def _parse_sweeps(items: Sequence[str], stiffness: str | None) -> dict[str, list
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from rigidbench import sweep
-    from rigidbench.runner import Interrupted
+    from rigidbench import journal, outputs, runner, sweep
 
-    if args.workers < 1:
-        raise UsageError(f"--workers = {args.workers} must be >= 1")
-    try:
-        points = sweep.plan(
-            args.targets,
-            integrators=args.integrators,
-            timesteps=args.timesteps,
-            params=_parse_sweeps(args.params, args.stiffness),
-        )
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
-    from rigidbench import journal
-
-    finished: dict[str, list[dict]] = {}
+    outputs.check_all([("--json", args.json), ("--jsonl", args.jsonl or args.resume)])
+    workers = _workers(args.workers, "--workers")
     path = args.resume or args.jsonl
-    invocation = {"sweep": [sweep.point_key(p) for p in points]}
-    if args.resume:
+    with journal.lock(path, create=not args.resume) if path else contextlib.nullcontext():
         try:
-            record = journal.read(args.resume)
+            points = sweep.plan(
+                args.targets,
+                integrators=args.integrators,
+                timesteps=args.timesteps,
+                params=_parse_sweeps(args.params, args.stiffness),
+            )
         except ValueError as exc:
             raise UsageError(str(exc)) from None
-        if record.header["invocation"] != invocation:
-            raise UsageError(f"journal {args.resume!r} holds a different sweep grid; give the same targets and grid")
-        journal.rewrite(args.resume, record)
-        for row in record.rows:
-            finished.setdefault(row["job"], []).append({k: v for k, v in row.items() if k not in ("job", "job_size")})
-    elif path:
-        journal.start(path, invocation)
+        finished: dict[str, list[dict]] = {}
+        invocation = {"sweep": [sweep.point_key(p) for p in points]}
+        if args.resume:
+            record = journal.read(args.resume, "sweep")
+            journal.warn(record)
+            if record.invocation != invocation:
+                raise UsageError(f"journal {args.resume} holds a different sweep grid; give the same targets and grid")
+            sweep.verify_journal(args.resume, record)
+            journal.truncate_tail(args.resume, record)
+            for job, rows in record.by_job().items():
+                finished[job] = [runner.strip(r) for r in rows]
+        elif path:
+            journal.start(path, "sweep", invocation)
 
-    def on_result(point: sweep.Point, rows: list[dict]) -> None:
-        if path:
-            journal.append(path, sweep.point_key(point), rows)
+        def on_result(point: sweep.Point, rows: list[dict]) -> None:
+            if path:
+                journal.append(path, sweep.point_key(point), rows)
 
-    t0 = time.perf_counter()
-    try:
-        result = sweep.execute(
-            points,
-            workers=args.workers,
-            progress=None if args.quiet else sweep.progress_line,
-            finished=finished,
-            on_result=on_result,
-        )
-    except Interrupted as exc:
-        print(
-            f"rigidbench: sweep interrupted by {exc.name}; finished points are in {path or '(nowhere: use --jsonl)'}",
-            file=sys.stderr,
-        )
-        return exc.status
+        t0 = time.perf_counter()
+        try:
+            result = sweep.execute(
+                points,
+                workers=workers,
+                progress=None if args.quiet else sweep.progress_line,
+                finished=finished,
+                on_result=on_result,
+            )
+        except runner.Interrupted as exc:
+            print(
+                f"rigidbench: sweep interrupted by {exc.name}; finished points are in "
+                f"{path or '(nowhere: use --jsonl)'}",
+                file=sys.stderr,
+            )
+            return exc.status
+    out = _human(args.json)
     if args.errors:
-        print(sweep.error_table(result))
-        print()
-    print(sweep.order_table(result.orders))
+        print(sweep.error_table(result), file=out)
+        print(file=out)
+    print(sweep.order_table(result.orders), file=out)
     import mujoco
 
-    print(f"\nmujoco {mujoco.__version__}; {len(points)} points in {time.perf_counter() - t0:.1f} s")
+    print(f"\nmujoco {mujoco.__version__}; {len(points)} points in {time.perf_counter() - t0:.1f} s", file=out)
     if args.json:
         sweep.write_json(args.json, result)
     return EXIT_OK
 
 
-def _cmd_report(args: argparse.Namespace) -> int:
-    from rigidbench import plots, report, results, runner
+def _workers(requested: int | None, option: str) -> int:
+    """Workers to use: `requested`, capped at the CPUs this process may use (saying so), or all of them."""
+    from rigidbench import runner
 
+    cpus = runner.default_workers()
+    if requested is None:
+        return cpus
+    if requested < 1:
+        raise UsageError(f"{option} = {requested} must be >= 1")
+    if requested > cpus:
+        print(f"rigidbench: {option} {requested} capped at the {cpus} CPUs available", file=sys.stderr)
+        return cpus
+    return requested
+
+
+def _human(*paths: str | None) -> TextIO:
+    """Where the human-readable table goes: standard output, unless a machine output is written there (``-``)."""
+    return sys.stderr if "-" in paths else sys.stdout
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from rigidbench import outputs, plots, report, results, runner
+
+    outputs.check_all([("--out", args.out)])
     try:
         runs, sweeps = report.load(args.sources)
         jobs = runner.plan(args.targets, {}, runner.settings_for("reference")) if not runs else []
@@ -340,8 +368,9 @@ def _cmd_render(args: argparse.Namespace) -> int:
     import os
     import subprocess
 
-    from rigidbench import render, runner
+    from rigidbench import outputs, render, runner
 
+    outputs.check_all([("--out", args.out)])
     try:
         settings = runner.settings_for(args.profile, args.integrator, args.timestep)
         width, _, height = args.size.lower().partition("x")
@@ -421,77 +450,124 @@ def _cmd_list(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _invocation(args: argparse.Namespace) -> dict:
-    return {
-        "targets": list(args.targets),
-        "profile": args.profile,
-        "sets": list(args.sets),
-        "integrator": args.integrator,
-        "timestep": args.timestep,
-    }
+# What a journal restores on --resume: what to run, never where to write (issue 20), with the types it must have.
+_RUN_INVOCATION = {
+    "targets": (list, str),
+    "profile": (str, None),
+    "sets": (list, str),
+    "integrator": ((str, type(None)), None),
+    "timestep": ((float, int, type(None)), None),
+}
+_CENSUS_INVOCATION = {"targets": (list, str), "n": (int, None), "seed": (int, None), "profile": (str, None)}
+
+
+def _invocation(args: argparse.Namespace, schema: dict = _RUN_INVOCATION) -> dict:
+    return {key: getattr(args, key) for key in schema}
+
+
+def _restore(args: argparse.Namespace, path: str, record, schema: dict) -> None:
+    """Set what to run from a journal's invocation onto `args`, refusing anything else or of the wrong type."""
+    from rigidbench.journal import JournalError
+
+    invocation = record.invocation
+    unknown = sorted(set(invocation) - set(schema))
+    if unknown:
+        raise JournalError(
+            f"{path}:1: the invocation holds {', '.join(map(repr, unknown))}, which a journal does not record"
+        )
+    for key, (kind, item) in schema.items():
+        if key not in invocation:
+            raise JournalError(f"{path}:1: the invocation has no {key!r}")
+        value = invocation[key]
+        bad = not isinstance(value, kind) or isinstance(value, bool) and kind in (int, float)
+        if not bad and item is not None:
+            bad = not all(isinstance(v, item) for v in value)
+        if bad:
+            raise JournalError(f"{path}:1: the invocation's {key!r} is {value!r}, not what a run records")
+        setattr(args, key, value)
+
+
+def _session(
+    args: argparse.Namespace,
+    kind: str,
+    schema: dict,
+    plan: Callable[[], tuple[Any, list]],
+) -> tuple[Any, list, Any, str | None]:
+    """The journaled run every command shares: lock the journal, restore what to run from it (--resume) or start
+    it (--jsonl), plan (every input validated before anything is simulated), check a resumed journal's rows
+    against the plan, and run the jobs not yet done (`runner.run_jobs`).
+
+    Returns (settings, jobs, result, journal path).
+    """
+    from rigidbench import journal, runner
+
+    path = args.resume or args.jsonl
+    with journal.lock(path, create=not args.resume) if path else contextlib.nullcontext():
+        record = None
+        if args.resume:
+            record = journal.read(args.resume, kind)
+            journal.warn(record)
+            default = _invocation(_parser().parse_args([kind]), schema)
+            given = _invocation(args, schema)
+            if given != default and given != record.invocation:
+                raise UsageError("--resume takes what to run from the journal; give no targets, parameters or settings")
+            _restore(args, args.resume, record, schema)
+        try:
+            settings, jobs = plan()
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        previous: dict = {}
+        if record is not None:
+            journal.verify(args.resume, record, {job.key: job.expected for job in jobs if job.expected})
+            journal.truncate_tail(args.resume, record)
+            previous = record.by_job()
+            if not args.quiet:
+                done = sum(job.key in previous for job in jobs)
+                print(f"resuming: {done} of {len(jobs)} cases already done", file=sys.stderr)
+        elif path:
+            journal.start(path, kind, _invocation(args, schema))
+        result = runner.run_jobs(
+            jobs,
+            settings,
+            journal_path=path,
+            previous=previous,
+            progress=None if args.quiet else _progress,
+            workers=_workers(args.jobs, "--jobs"),
+        )
+    return settings, jobs, result, path
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    import mujoco
+    from rigidbench import outputs, results, runner
 
-    from rigidbench import journal, results, runner
+    outputs.check_all([("--json", args.json), ("--junit", args.junit), ("--jsonl", args.jsonl or args.resume)])
 
-    previous: dict[str, list[dict]] = {}
-    journal_path = args.jsonl
-    if args.resume:
-        try:
-            record = journal.read(args.resume)
-        except ValueError as exc:
-            raise UsageError(str(exc)) from None
-        given = _invocation(args)
-        if given != _invocation(_parser().parse_args(["run"])) and given != record.header["invocation"]:
-            raise UsageError("--resume takes the targets and settings from the journal; give no others")
-        if record.header["mujoco"] != mujoco.__version__:
-            raise UsageError(
-                f"journal {args.resume!r} was written with mujoco {record.header['mujoco']}, this is "
-                f"{mujoco.__version__}: results would mix versions"
-            )
-        for key, value in record.header["invocation"].items():
-            setattr(args, key, value)
-        journal.rewrite(args.resume, record)  # drop a torn tail, if any
-        previous, journal_path = record.by_job(), args.resume
-    try:  # every input is validated here, before anything is simulated
+    def plan():
         settings = runner.settings_for(args.profile, args.integrator, args.timestep)
-        jobs = runner.plan(args.targets, _parse_sets(args.sets), settings)
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
-    if journal_path and not args.resume:
-        journal.start(journal_path, _invocation(args))
-    if args.resume and not args.quiet:
-        done = sum(job.key in previous for job in jobs)
-        print(f"resuming: {done} of {len(jobs)} cases already done", file=sys.stderr)
+        return settings, runner.plan(args.targets, _parse_sets(args.sets), settings)
 
     t0 = time.perf_counter()
-    result = runner.run_jobs(
-        jobs,
-        settings,
-        journal_path=journal_path,
-        previous=previous,
-        progress=None if args.quiet else _progress,
-        workers=args.jobs or runner.default_workers(),
-    )
+    _, jobs, result, path = _session(args, "run", _RUN_INVOCATION, plan)
     rows = result.ordered()
+    completion = results.Completion(
+        len(jobs), tuple(job.key for job in result.missing), result.interrupted and result.interrupted.name
+    )
     if result.interrupted is not None:
         print(
-            f"rigidbench: interrupted by {result.interrupted.name} after {len(result.rows)} of {len(jobs)} cases; "
-            f"finished rows are in {journal_path or args.json or '(nowhere: use --jsonl)'}",
+            f"rigidbench: interrupted by {result.interrupted.name} after {len(jobs) - len(result.missing)} of "
+            f"{len(jobs)} cases; finished rows are in {path or args.json or '(nowhere: use --jsonl)'}",
             file=sys.stderr,
         )
-        _write(args, rows)
+        _write(args, rows, completion)
         return result.interrupted.status
-    print(results.table(rows))
-    print()
+    out = _human(args.json, args.junit)
+    print(results.table(rows), file=out)
+    print(file=out)
     if rows:
+        elapsed = time.perf_counter() - t0
         s = rows[0]["settings"]
-        print(
-            f"mujoco {s['mujoco']}, profile {args.profile}; {results.summary(rows)} in {time.perf_counter() - t0:.1f} s"
-        )
-    _write(args, rows)
+        print(f"mujoco {s['mujoco']}, profile {args.profile}; {results.summary(rows)} in {elapsed:.1f} s", file=out)
+    _write(args, rows, completion)
     return EXIT_OK if rows and all(r["status"] == results.PASS for r in rows) else EXIT_FAIL
 
 
@@ -502,78 +578,46 @@ def _progress(i: int, n: int, job) -> None:
 def _cmd_census(args: argparse.Namespace) -> int:
     import mujoco
 
-    from rigidbench import census, journal, results, runner
+    from rigidbench import census, outputs, runner
 
-    invocation = {
-        "command": "census",
-        "targets": list(args.targets),
-        "n": args.n,
-        "seed": args.seed,
-        "profile": args.profile,
-    }
-    previous: dict[str, list[dict]] = {}
-    journal_path = args.jsonl
-    if args.resume:
-        try:
-            record = journal.read(args.resume)
-        except ValueError as exc:
-            raise UsageError(str(exc)) from None
-        if record.header["invocation"].get("command") != "census":
-            raise UsageError(f"journal {args.resume!r} is not a census journal")
-        if record.header["mujoco"] != mujoco.__version__:
-            raise UsageError(
-                f"journal {args.resume!r} was written with mujoco {record.header['mujoco']}, this is "
-                f"{mujoco.__version__}: results would mix versions"
-            )
-        invocation = record.header["invocation"]
-        args.targets, args.n, args.seed, args.profile = (
-            invocation["targets"],
-            invocation["n"],
-            invocation["seed"],
-            invocation["profile"],
-        )
-        journal.rewrite(args.resume, record)
-        previous, journal_path = record.by_job(), args.resume
-    try:
+    outputs.check_all([("--json", args.json), ("--jsonl", args.jsonl or args.resume)])
+    drawn: list = []
+
+    def plan():
         settings = runner.settings_for(args.profile)
         if not args.quiet:
             print("drawing and checking parameter sets ...", file=sys.stderr, flush=True)
         draws, jobs = census.plan(args.targets, n=args.n, seed=args.seed, settings=settings)
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
-    if journal_path and not args.resume:
-        journal.start(journal_path, invocation)
+        drawn.extend(draws)
+        return settings, jobs
+
     t0 = time.perf_counter()
-    result = runner.run_jobs(
-        jobs,
-        settings,
-        journal_path=journal_path,
-        previous=previous,
-        progress=None if args.quiet else _progress,
-        workers=args.jobs or runner.default_workers(),
-    )
-    census.settle(draws, result)
-    print(census.table(draws))
+    _, jobs, result, _path = _session(args, "census", _CENSUS_INVOCATION, plan)
+    census.settle(drawn, result)
+    out = _human(args.json)
+    print(census.table(drawn), file=out)
     print(
         f"\nmujoco {mujoco.__version__}, profile {args.profile}, seed {args.seed}, n {args.n}; "
-        f"{len(jobs)} simulated in {time.perf_counter() - t0:.1f} s"
+        f"{len(jobs)} simulated in {time.perf_counter() - t0:.1f} s",
+        file=out,
     )
     if args.json:
         doc = census.document(
-            draws, n=args.n, seed=args.seed, profile=args.profile, complete=result.interrupted is None
+            drawn, n=args.n, seed=args.seed, profile=args.profile, complete=result.interrupted is None
         )
-        results.atomic_write(args.json, _dumps(doc))
+        outputs.write(args.json, _dumps(doc), "--json")
     if result.interrupted is not None:
         print(f"rigidbench: census interrupted by {result.interrupted.name}", file=sys.stderr)
         return result.interrupted.status
-    return EXIT_OK if census.clean(draws) else EXIT_FAIL
+    return EXIT_OK if census.clean(drawn) else EXIT_FAIL
 
 
 def _cmd_power(args: argparse.Namespace) -> int:
     import mujoco
 
-    from rigidbench import power, results, runner
+    from rigidbench import outputs, power, runner
 
+    outputs.check_all([("--json", args.json)])
     try:
         settings = runner.settings_for(args.profile)
         pairs = power.plan(args.targets, settings)
@@ -583,18 +627,18 @@ def _cmd_power(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     alive = list(pairs)
     interrupted = None
+    workers = _workers(args.jobs, "--jobs")
     for delta in power.DELTAS:
         if not alive:
             break
         if not args.quiet:
             print(f"delta = {delta:.0e}: {len(alive)} quantities", file=sys.stderr, flush=True)
         jobs = power.jobs_at(alive, delta)
-        result = runner.run_jobs(jobs, settings, workers=args.jobs or runner.default_workers())
+        result = runner.run_jobs(jobs, settings, workers=workers)
         caught: dict[tuple[str, str], list[str]] = {}
         for job in jobs:
-            rows = result.rows.get(job.key, [])
             quantity = job.variant.split("*")[0]
-            caught.setdefault((job.scenario.slug, quantity), []).extend(power.failing(rows))
+            caught.setdefault((job.scenario.slug, quantity), []).extend(power.failing(result.rows.get(job.key, [])))
         for sc, q in alive:
             limits[(sc.slug, q.name)].tried.append(delta)
         alive = [(sc, q) for sc, q in alive if caught.get((sc.slug, q.name))]
@@ -607,10 +651,12 @@ def _cmd_power(args: argparse.Namespace) -> int:
     if interrupted is None:
         for sc, q in pairs:
             limits[(sc.slug, q.name)].theory = power.theory_sensitivity(sc, q, settings)
-    print(power.table(list(limits.values())))
+    out = _human(args.json)
+    print(power.table(list(limits.values())), file=out)
     print(
         f"\nmujoco {mujoco.__version__}, profile {args.profile}; deltas {power.DELTAS[0]:.0e} .. "
-        f"{power.DELTAS[-1]:.0e}; {time.perf_counter() - t0:.1f} s"
+        f"{power.DELTAS[-1]:.0e}; {time.perf_counter() - t0:.1f} s",
+        file=out,
     )
     if args.json:
         doc = {
@@ -620,7 +666,7 @@ def _cmd_power(args: argparse.Namespace) -> int:
             "complete": interrupted is None,
             "limits": [lim.record() for lim in limits.values()],
         }
-        results.atomic_write(args.json, _dumps(doc))
+        outputs.write(args.json, _dumps(doc), "--json")
     if interrupted is not None:
         print(f"rigidbench: power interrupted by {interrupted.name}", file=sys.stderr)
         return interrupted.status
@@ -635,48 +681,66 @@ def _dumps(doc: dict) -> str:
     return json.dumps(_jsonable(doc), indent=1) + "\n"
 
 
-def _strip(row: dict) -> dict:
-    return {k: v for k, v in row.items() if k not in ("job", "job_size")}
-
-
 def _raise_interrupted(signum: int, _frame: object) -> None:
     from rigidbench.runner import Interrupted
 
     raise Interrupted(signum)
 
 
-def _write(args: argparse.Namespace, rows: list[dict]) -> None:
+def _write(args: argparse.Namespace, rows: list[dict], completion) -> None:
     from rigidbench import results
 
     if args.json:
-        results.write_json(args.json, rows)
+        results.write_json(args.json, rows, completion)
     if args.junit:
-        results.write_junit(args.junit, rows)
+        results.write_junit(args.junit, rows, completion)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    # Signals first: from here on SIGINT/SIGTERM end the command with one line and 130/143, planning included.
+    handlers = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        return _main(argv)
+    except BaseException as exc:  # noqa: BLE001 - sorted below: everything a user can cause is one line
+        from rigidbench.runner import Interrupted
+
+        if isinstance(exc, Interrupted):
+            print(f"rigidbench: interrupted by {exc.name}", file=sys.stderr)
+            return exc.status
+        if isinstance(exc, UsageError) or _is_one_line(exc):
+            print(f"rigidbench: error: {exc}", file=sys.stderr)
+            return EXIT_USAGE
+        raise
+    finally:
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
+
+
+def _is_one_line(exc: BaseException) -> bool:
+    """An error a user's input or machine causes (an output, a journal), reported in one line with status 2."""
+    from rigidbench.journal import JournalError
+    from rigidbench.outputs import OutputError
+
+    return isinstance(exc, (OutputError, JournalError))
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
-    try:
-        if args.command == "list":
-            try:
-                return _cmd_list(args)
-            except ValueError as exc:
-                raise UsageError(str(exc)) from None
-        if args.command == "report":
-            return _cmd_report(args)
-        if args.command == "render":
-            return _cmd_render(args)
-        handlers = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
-        commands = {"sweep": _cmd_sweep, "run": _cmd_run, "census": _cmd_census, "power": _cmd_power}
+    if args.command == "list":
         try:
-            return commands[args.command](args)
-        finally:
-            for sig, handler in handlers.items():
-                signal.signal(sig, handler)
-    except UsageError as exc:
-        print(f"rigidbench: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+            return _cmd_list(args)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+    commands = {
+        "report": _cmd_report,
+        "render": _cmd_render,
+        "sweep": _cmd_sweep,
+        "run": _cmd_run,
+        "census": _cmd_census,
+        "power": _cmd_power,
+    }
+    return commands[args.command](args)
 
 
 if __name__ == "__main__":

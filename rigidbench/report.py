@@ -50,8 +50,31 @@ def load(paths: Sequence[str]) -> tuple[list[dict[str, Any]], list[dict[str, Any
             raise ValueError(f"--from {path}: {exc}") from None
         if not isinstance(doc, dict) or "results" not in doc or "mujoco" not in doc:
             raise ValueError(f"--from {path}: not a rigidbench results or sweep document (no 'results'/'mujoco')")
+        _check_rows(path, doc["results"])
         (sweeps if doc.get("kind") == "sweep" else runs).append(doc)
     return runs, sweeps
+
+
+# What every result row must hold for the report to read it (`rigidbench.results.rows_of`), with its type.
+_ROW_FIELDS = {"scenario": str, "case": str, "check": str, "status": str, "settings": dict}
+
+
+def _check_rows(path: str, rows: Any) -> None:
+    """Refuse a document whose ``results`` is not a list of rows with the fields the report reads.
+
+    Raises
+    ------
+    ValueError
+        Naming the file, the row's index and the field.
+    """
+    if not isinstance(rows, list):
+        raise ValueError(f"--from {path}: 'results' must be a list of rows, not {type(rows).__name__}")
+    for i, row in enumerate(rows):
+        if not isinstance(row, dict):
+            raise ValueError(f"--from {path}: results[{i}] is not an object")
+        for name, kind in _ROW_FIELDS.items():
+            if not isinstance(row.get(name), kind):
+                raise ValueError(f"--from {path}: results[{i}] has no valid {name!r}")
 
 
 def png(figure: Any, dpi: int = 110) -> bytes:
@@ -299,7 +322,7 @@ def _orders_table(doc) -> str:
 def write(path: str, text: str) -> None:
     from rigidbench.results import atomic_write
 
-    atomic_write(path, text)
+    atomic_write(path, text, "--out")
 
 
 def progress_line(msg: str) -> None:

@@ -11,10 +11,9 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import mujoco
@@ -73,10 +72,48 @@ def rows_of(run: CaseRun) -> list[dict[str, Any]]:
     ]
 
 
-def document(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+@dataclass(frozen=True)
+class Completion:
+    """Whether a run finished: an interrupted run's files say so (issue 20), so that a CI never publishes a
+    partial result as a complete one.
+
+    Attributes
+    ----------
+    total : int
+        Cases the run planned.
+    not_run : tuple of str
+        The cases that did not finish (``scenario:case``, with the job's own parameters if it had any).
+    interrupted_by : str or None
+        The signal's name (``"SIGINT"``), None for a run that finished.
+    """
+
+    total: int
+    not_run: tuple[str, ...] = ()
+    interrupted_by: str | None = None
+
+    @property
+    def complete(self) -> bool:
+        return not self.not_run and self.interrupted_by is None
+
+    def line(self) -> str:
+        return (
+            f"the run was interrupted by {self.interrupted_by} after {self.total - len(self.not_run)} of "
+            f"{self.total} cases; not run: {', '.join(self.not_run)}"
+        )
+
+
+def document(rows: Sequence[dict[str, Any]], completion: Completion | None = None) -> dict[str, Any]:
+    """The JSON document of a run: versions, whether it is complete (and what was not run), the rows."""
     from rigidbench import __version__
 
-    return {"rigidbench": __version__, "mujoco": mujoco.__version__, "results": list(rows)}
+    doc: dict[str, Any] = {"rigidbench": __version__, "mujoco": mujoco.__version__}
+    if completion is not None:
+        doc["complete"] = completion.complete
+        if not completion.complete:
+            doc["interrupted_by"] = completion.interrupted_by
+            doc["not_run"] = list(completion.not_run)
+    doc["results"] = list(rows)
+    return doc
 
 
 def _jsonable(x: Any) -> Any:
@@ -89,26 +126,34 @@ def _jsonable(x: Any) -> Any:
     return x
 
 
-def atomic_write(path: str, text: str) -> None:
-    """Write `text` to `path` through a temporary file and a rename, so a reader never sees half a file."""
-    directory = os.path.dirname(os.path.abspath(path))
-    os.makedirs(directory, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".rigidbench-", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+def atomic_write(path: str, text: str, option: str = "output") -> None:
+    """Write `text` to `path` so that a reader never sees half a file (`rigidbench.outputs.write`).
+
+    Raises
+    ------
+    rigidbench.outputs.OutputError
+        If it cannot be written (the previous file is left as it was).
+    """
+    from rigidbench import outputs
+
+    outputs.write(path, text, option)
 
 
-def write_json(path: str, rows: Sequence[dict[str, Any]]) -> None:
-    atomic_write(path, json.dumps(_jsonable(document(rows)), indent=1) + "\n")
+def json_text(rows: Sequence[dict[str, Any]], completion: Completion | None = None) -> str:
+    return json.dumps(_jsonable(document(rows, completion)), indent=1) + "\n"
 
 
-def write_junit(path: str, rows: Sequence[dict[str, Any]]) -> None:
-    """JUnit XML: one testsuite per scenario, one testcase per check (``case:check``)."""
+def write_json(path: str, rows: Sequence[dict[str, Any]], completion: Completion | None = None) -> None:
+    atomic_write(path, json_text(rows, completion), "--json")
+
+
+def write_junit(path: str, rows: Sequence[dict[str, Any]], completion: Completion | None = None) -> None:
+    atomic_write(path, junit_text(rows, completion), "--junit")
+
+
+def junit_text(rows: Sequence[dict[str, Any]], completion: Completion | None = None) -> str:
+    """JUnit XML: one testsuite per scenario, one testcase per check (``case:check``); an interrupted run adds a
+    testsuite ``rigidbench`` whose one testcase is an error saying how far it got, so a CI goes red."""
     suites = ET.Element("testsuites", name="rigidbench")
     by_scenario: dict[str, list[dict[str, Any]]] = {}
     for row in rows:
@@ -137,8 +182,12 @@ def write_junit(path: str, rows: Sequence[dict[str, Any]]) -> None:
             elif row["status"] == ERROR:
                 ET.SubElement(case, "error", message=row["message"])
             ET.SubElement(case, "system-out").text = json.dumps(_jsonable({"params": row["params"]}))
+    if completion is not None and not completion.complete:
+        suite = ET.SubElement(suites, "testsuite", name="rigidbench", tests="1", failures="0", errors="1")
+        case = ET.SubElement(suite, "testcase", classname="rigidbench", name="run-complete")
+        ET.SubElement(case, "error", message=completion.line())
     ET.indent(suites)
-    atomic_write(path, ET.tostring(suites, encoding="unicode", xml_declaration=True) + "\n")
+    return ET.tostring(suites, encoding="unicode", xml_declaration=True) + "\n"
 
 
 def _verdict_line(row: dict[str, Any]) -> str:

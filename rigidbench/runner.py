@@ -9,6 +9,7 @@ SIGINT/SIGTERM (`Interrupted`). The CLI only parses and prints.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import signal
@@ -24,7 +25,7 @@ from rigidbench import registry
 from rigidbench.params import Value
 from rigidbench.results import ERROR, rows_of
 from rigidbench.scenario import Scenario
-from rigidbench.settings import Settings, profile
+from rigidbench.settings import Settings, profile, read_settings
 
 Perturb = Callable[[mujoco.MjModel], None]
 
@@ -48,6 +49,9 @@ class Job:
     overrides: Mapping[str, Value] = field(default_factory=dict)
     variant: str = ""
     perturb: Perturb | None = field(default=None, compare=False, repr=False)
+    # What planning found (`check_job`): the settings the job runs with, read back from its compiled model, and
+    # the number of checks of its case; a resumed journal's rows must match them (`journal.verify`).
+    expected: tuple[dict[str, Any], int] | None = field(default=None, compare=False, repr=False)
 
     @property
     def name(self) -> str:
@@ -81,9 +85,14 @@ def parse_overrides(scenario: Scenario, overrides: Mapping[str, str]) -> dict[st
     return parsed
 
 
-def check_job(job: Job, settings: Settings | None) -> None:
+def check_job(job: Job, settings: Settings | None) -> Job:
     """Everything about a job that can be known without simulating: parameters, the theory's domain, the
     compiled model (e.g. contact stiffness against the timestep), the run's step count and memory.
+
+    Returns
+    -------
+    Job
+        The job with `expected` filled in.
 
     Raises
     ------
@@ -91,9 +100,10 @@ def check_job(job: Job, settings: Settings | None) -> None:
         Prefixed with ``scenario:case``.
     """
     try:
-        job.scenario.prepare(job.case, job.overrides, settings)
+        prep = job.scenario.prepare(job.case, job.overrides, settings)
     except ValueError as exc:
         raise type(exc)(*_prefixed(exc, job.name)) from None
+    return dataclasses.replace(job, expected=(read_settings(prep.model), len(prep.case.checks)))
 
 
 def _prefixed(exc: ValueError, name: str) -> tuple:
@@ -125,9 +135,7 @@ def plan(
         scenario, cases = registry.parse_target(target)
         parsed = parse_overrides(scenario, overrides or {})
         for case in cases:
-            job = Job(scenario, case, parsed)
-            check_job(job, settings)
-            jobs.append(job)
+            jobs.append(check_job(Job(scenario, case, parsed), settings))
     return jobs
 
 
@@ -218,7 +226,7 @@ class RunResult:
 
     def ordered(self) -> list[dict[str, Any]]:
         """Every finished row, in job order (the journal's bookkeeping fields removed)."""
-        return [_strip(r) for job in self.jobs for r in self.rows.get(job.key, [])]
+        return [strip(r) for job in self.jobs for r in self.rows.get(job.key, [])]
 
     @property
     def missing(self) -> list[Job]:
@@ -259,7 +267,8 @@ def run_jobs(
     return result
 
 
-def _strip(row: dict) -> dict:
+def strip(row: dict) -> dict:
+    """A journaled row without the journal's bookkeeping (``job``, ``job_size``)."""
     return {k: v for k, v in row.items() if k not in ("job", "job_size")}
 
 

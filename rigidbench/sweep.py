@@ -16,6 +16,7 @@ import concurrent.futures
 import json
 import math
 import multiprocessing
+import os
 import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -418,6 +419,34 @@ def run_point(point: Point) -> list[dict[str, Any]]:
     return rows
 
 
+def start_worker(parent: int) -> None:
+    """Set up a worker process: Ctrl-C is the parent's to handle (a terminal sends SIGINT to the whole process
+    group; the parent stops the workers), and the worker ends when the process that started it does, even by
+    SIGKILL, which runs no cleanup: on Linux the kernel sends it SIGKILL (``prctl(PR_SET_PDEATHSIG)``); elsewhere,
+    and in case the parent died before that was set, a daemon thread polls the parent's pid. Without it a killed
+    sweep leaves its workers (~120 MB each) and multiprocessing's resource tracker running for ever."""
+    import ctypes
+    import signal
+    import threading
+    import time
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):
+        pass
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    if os.getppid() != parent:
+        os._exit(1)
+    threading.Thread(target=watch, name="rigidbench-watch-parent", daemon=True).start()
+
+
 def point_key(point: Point) -> str:
     """A point's identity in a journal (`rigidbench.journal`), stable across runs."""
     return json.dumps(point.record(), sort_keys=True)
@@ -453,13 +482,18 @@ def execute(
             record(i, run_point(points[i]), done)
     else:
         ctx = multiprocessing.get_context("spawn")  # no fork of a process that may hold GL or threads
-        with concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        with concurrent.futures.ProcessPoolExecutor(
+            max_workers=workers, mp_context=ctx, initializer=start_worker, initargs=(os.getpid(),)
+        ) as pool:
             futures = {pool.submit(run_point, points[i]): i for i in todo}
             try:
                 for done, future in enumerate(concurrent.futures.as_completed(futures), start=1):
                     record(futures[future], future.result(), done)
-            except BaseException:  # Ctrl-C or a worker's error: drop what has not started, do not wait for it
+            except BaseException:  # Ctrl-C or a worker's error: drop what has not started, stop what runs
+                running = list((getattr(pool, "_processes", None) or {}).values())
                 pool.shutdown(wait=False, cancel_futures=True)
+                for process in running:
+                    process.terminate()
                 raise
     sweep = Sweep(points=list(points))
     sweep.rows = [row for rows in results if rows is not None for row in rows]
@@ -468,9 +502,39 @@ def execute(
 
 
 def write_json(path: str, sweep: Sweep) -> None:
-    import json
+    atomic_write(path, json.dumps(_jsonable(sweep.document()), indent=1) + "\n", "--json")
 
-    atomic_write(path, json.dumps(_jsonable(sweep.document()), indent=1) + "\n")
+
+def verify_journal(path: str, record: Any) -> None:
+    """Check that every journaled point's rows ran at that point's settings (its integrator and timestep, read
+    back from the compiled model) and name it; a journal whose rows mix settings is refused.
+
+    Raises
+    ------
+    rigidbench.journal.JournalError
+        Naming the file and line.
+    """
+    from rigidbench.journal import JournalError
+
+    for key, rows in record.by_job().items():
+        line = record.lines[key]
+        try:
+            point = json.loads(key)
+        except json.JSONDecodeError:
+            raise JournalError(f"{path}:{line}: {key!r} is not a sweep point") from None
+        for i, row in enumerate(rows):
+            settings = row.get("settings") if isinstance(row.get("settings"), dict) else {}
+            if row.get("point") != point or (
+                row.get("status") != REFUSED
+                and (
+                    settings.get("integrator") != point.get("integrator")
+                    or settings.get("timestep") != point.get("timestep")
+                )
+            ):
+                raise JournalError(
+                    f"{path}:{line + i}: a row of point {key} ran with other settings than the point's: results "
+                    "would mix settings"
+                )
 
 
 # ---- text output ---------------------------------------------------------------------------------------------

@@ -42,7 +42,7 @@ def test_sigterm_mid_run_leaves_a_valid_journal_and_resume_equals_an_uninterrupt
     proc.send_signal(signal.SIGTERM)
     status = proc.wait(timeout=120)
     assert status == 143, proc.stderr.read()
-    partial = journal.read(str(path))
+    partial = journal.read(str(path), "run")
     assert 1 <= len(partial.done) < 6  # some, not all, of the six cases
     assert all(json.loads(line) for line in path.read_text().splitlines())  # every line is valid JSON
 
@@ -51,7 +51,7 @@ def test_sigterm_mid_run_leaves_a_valid_journal_and_resume_equals_an_uninterrupt
     assert cli.main(["run", "--quiet", *targets, "--json", str(tmp_path / "whole.json")]) == 0
     whole = json.loads((tmp_path / "whole.json").read_text())["results"]
     assert _stable(resumed) == _stable(whole)
-    assert len(journal.read(str(path)).done) == 6
+    assert len(journal.read(str(path), "run").done) == 6
 
 
 def test_a_torn_last_line_is_ignored_and_its_job_redone(tmp_path):
@@ -60,10 +60,10 @@ def test_a_torn_last_line_is_ignored_and_its_job_redone(tmp_path):
     text = open(path).read()
     with open(path, "w") as f:
         f.write(text[: len(text) - 40])  # power loss in the middle of the last row
-    record = journal.read(path)
+    record = journal.read(path, "run")
     assert record.done == {"heavy-top:nutation"}
     assert cli.main(["run", "--quiet", "--resume", path]) == 0
-    assert journal.read(path).done == {"heavy-top:nutation", "heavy-top:looping"}
+    assert journal.read(path, "run").done == {"heavy-top:nutation", "heavy-top:looping"}
 
 
 def test_resume_refuses_other_targets_and_non_journals(tmp_path, capsys):
