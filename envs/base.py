@@ -21,10 +21,22 @@ from rigidbench.settings import Settings, profile, read_settings
 _FLOAT64 = np.dtype(np.float64)
 # Smallest shadow map (pixels per side) the envs render with; see `ScenarioEnv.render`.
 SHADOW_MAP_MIN = 1024
+# Largest deviation a step's reward counts (rewards are >= -DEVIATION_CAP), as the control tasks cap their terms.
+# A step on which the simulation diverges scores -DEVIATION_CAP for itself and for every step the episode had
+# left: the worst the rest of the episode could have scored, so that blowing up the simulation never pays.
+DEVIATION_CAP = 10.0
 
 
 class ScenarioEnv(gym.Env):
     """Base class of the validation environments (zero action = the textbook problem).
+
+    Reward: ``-min(deviation, DEVIATION_CAP)`` per step, the deviation of the state from the closed form (each env
+    says how it is normalised). A step on which the simulation diverges ends the episode (``terminated``) and
+    pays ``-DEVIATION_CAP`` for itself and each step left: the worst the rest of the episode could have scored.
+    Reaching the scenario's duration ends it with ``truncated`` (a time limit: the system goes on).
+
+    ``metadata["render_fps"]`` is ``1 / (timestep * frame_skip)``: a recorded video plays in real time. Copies
+    (`copy.deepcopy`, `pickle`) of an env mid-episode continue exactly as the original would.
 
     Parameters
     ----------
@@ -179,14 +191,30 @@ class ScenarioEnv(gym.Env):
         time = data.time
         # `_diverged`, inlined: time fell behind (MuJoCo reset a blown-up state) or the observation is not finite.
         if time < self._behind + k * self._env_dt or not math.isfinite(sum(obs.tolist())):  # obs is 1-D
-            obs = np.clip(
-                np.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0),
-                self.observation_space.low,
-                self.observation_space.high,
-            )
-            return obs, 0.0, True, False, {"diverged": True, "time": float(time)}
+            return self._diverged_step(obs, k, time)
         info = self._step_info(obs, k, time)
         return obs, info["reward_deviation"], False, time >= self._end, info
+
+    def _diverged_step(self, obs: np.ndarray, k: int, time: float):
+        """The step on which the simulation diverged: it ends the episode and pays the worst the rest of the
+        episode could have scored (`DEVIATION_CAP` for it and for each step left); ``info`` has the same keys as
+        any step's, the measurement NaN."""
+        left = max(0, math.ceil((self.episode_duration - (self._time0 + k * self._env_dt)) / self._env_dt))
+        reward = -DEVIATION_CAP * (1 + left)
+        names = self._observable_names
+        predicted = self._rows[k] if k < self._table_len else [math.nan] * len(names)
+        info = {
+            "time": float(time),
+            "measured": dict.fromkeys(names, math.nan),
+            "predicted": dict(zip(names, predicted)),  # noqa: B905 (checked in `_load`)
+            "deviation": math.inf,
+            "reward_deviation": reward,
+            "diverged": True,
+        }
+        obs = np.clip(
+            np.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0), self.observation_space.low, self.observation_space.high
+        )
+        return obs, reward, True, False, info
 
     def _checked_action(self, action) -> np.ndarray:
         """`action` as float64 of the action space's shape, clipped to it.
@@ -221,6 +249,10 @@ class ScenarioEnv(gym.Env):
     def render(self):
         if self.render_mode != "rgb_array":
             return None
+        return self._frame()
+
+    def _frame(self) -> np.ndarray:
+        """One RGB frame (height, width, 3) of the current state."""
         if self._renderer is None or self._renderer.model is not self.model:
             self.close()
             # Headless GL without a GPU (EGL/OSMesa on llvmpipe) spends most of a frame on the shadow map:
@@ -236,6 +268,20 @@ class ScenarioEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+    # ---- copies ------------------------------------------------------------------------------------------
+
+    def __getstate__(self) -> dict[str, Any]:
+        """What a copy or a pickle keeps: everything but the renderer (a GL context) and the per-step views, which
+        point into this env's MjData and are rebound to the copy's (`__setstate__`)."""
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        if self._views_ready:
+            self._bind_views()  # the copied views are arrays of their own: point them into the copied MjData
 
     # ---- internals --------------------------------------------------------------------------------------
 
@@ -267,6 +313,7 @@ class ScenarioEnv(gym.Env):
         self._begin()
         # Theory on the env's time grid, evaluated once (vectorised) so a step costs a table lookup.
         self._env_dt = env_dt = self.model.opt.timestep * self.frame_skip
+        self.metadata = {**type(self).metadata, "render_fps": _fps(env_dt)}
         self._time0 = float(self.data.time)
         self._behind = self._time0 - 0.5 * env_dt  # step k has fallen behind (diverged) before time _behind + k env_dt
         n = int(np.ceil(self.episode_duration / env_dt)) + 2
@@ -308,7 +355,7 @@ class ScenarioEnv(gym.Env):
             "measured": measured_dict,
             "predicted": predicted_dict,
             "deviation": deviation,
-            "reward_deviation": -deviation,
+            "reward_deviation": -deviation if deviation <= DEVIATION_CAP else -DEVIATION_CAP,
             "diverged": False,
         }
 
@@ -334,6 +381,12 @@ class ScenarioEnv(gym.Env):
 def _all_floats(values) -> bool:
     """Whether `values` is a sequence of Python floats (what ``info`` may hold as it is, e.g. for JSON)."""
     return all(type(v) is float for v in values)
+
+
+def _fps(env_dt: float) -> float | int:
+    """Frames per second of real-time playback at `env_dt` simulated seconds per step (an int when whole)."""
+    fps = 1.0 / env_dt
+    return round(fps) if abs(fps - round(fps)) <= 1e-9 * fps else fps
 
 
 def _settings(profile_name: str, integrator: str | None, timestep: float | None) -> Settings:

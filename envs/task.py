@@ -199,6 +199,10 @@ class ClosedLoopTask(TaskEnv):
 
     # Simulated time of an episode (s); a constructor argument of the concrete tasks.
     episode_duration: float
+    # Whether the horizon is the task's own end (gymnasium's `terminated`): its reward is paid there and the
+    # observation shows the time left, so nothing follows it to bootstrap from. Otherwise the horizon is a time
+    # limit on a task that goes on (`truncated`), and a learner rightly bootstraps past it.
+    horizon_ends_task: ClassVar[bool] = False
 
     def _terms(self, action: np.ndarray) -> dict[str, float]:
         raise NotImplementedError
@@ -226,7 +230,8 @@ class ClosedLoopTask(TaskEnv):
         return self._last_observation
 
     def _episode_end(self) -> tuple[bool, bool]:
-        return False, self._k >= self._nsteps
+        end = self._k >= self._nsteps
+        return (end, False) if self.horizon_ends_task else (False, end)
 
     def _reference_reward(self) -> float:
         return float(self._reference[self._k]) if self._k < len(self._reference) else 0.0
@@ -260,7 +265,16 @@ class ShotTask(TaskEnv):
 
     Subclasses implement `_shot` (simulate the action from the episode's initial state; return the reward
     terms and the outcome) and `_theory_reward`; the observation is the target (`target_names`, in order).
+
+    Recording a shot: one step is the whole shot, so a per-step video has two frames. With
+    ``render_mode="rgb_array_list"``, ``render()`` after a step returns `SHOT_FRAMES` frames spread over the shot's
+    simulated time (after a reset: the one frame of the start), to be played at ``metadata["render_fps"]`` (30: a
+    3 s slow-motion clip), e.g. ``gymnasium.utils.save_video.save_video(env.render(), "videos",
+    fps=env.metadata["render_fps"])``.
     """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "rgb_array_list"], "render_fps": 30}
+    SHOT_FRAMES: ClassVar[int] = 90
 
     def _observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(len(self.target_names),), dtype=np.float64)
@@ -276,6 +290,28 @@ class ShotTask(TaskEnv):
 
     def _advance(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
         return self._shot(action)
+
+    def _load(self, case: str, params: Mapping[str, Any]) -> None:
+        super()._load(case, params)
+        self.metadata = {**type(self).metadata}  # a shot is replayed in slow motion, not in real time
+        self._shot_states: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def render(self):
+        if self.render_mode != "rgb_array_list":
+            return super().render()
+        shot, self._shot_states = self._shot_states, None
+        if shot is None:
+            return [self._frame()]
+        time, qpos, qvel = shot
+        final = (self.data.qpos.copy(), self.data.qvel.copy(), float(self.data.time))
+        frames = []
+        try:
+            for i in np.unique(np.linspace(0, len(time) - 1, self.SHOT_FRAMES).round().astype(int)):
+                self._show(qpos[i], qvel[i], float(time[i]))
+                frames.append(self._frame())
+        finally:
+            self._show(*final)
+        return frames
 
     def _reference_reward(self) -> float:
         return self._theory_reward()
@@ -299,6 +335,7 @@ class ShotTask(TaskEnv):
         duration = min(float(scenario.duration(self.prediction)), max_duration)
         nstep = steps_for(duration, model.opt.timestep)
         traj = simulate(model, self.data, duration, control=scenario.control(model, model.opt.timestep, nstep))
+        self._shot_states = (traj.time, traj.qpos, traj.qvel)
         self._show(traj.qpos[-1], traj.qvel[-1], float(traj.time[-1]))
         if traj.diverged_at is not None:
             return None
