@@ -526,15 +526,34 @@ def _session(
                 print(f"resuming: {done} of {len(jobs)} cases already done", file=sys.stderr)
         elif path:
             journal.start(path, kind, _invocation(args, schema))
-        result = runner.run_jobs(
-            jobs,
-            settings,
-            journal_path=path,
-            previous=previous,
-            progress=None if args.quiet else _progress,
-            workers=_workers(args.jobs, "--jobs"),
-        )
+        with _mujoco_warnings():
+            result = runner.run_jobs(
+                jobs,
+                settings,
+                journal_path=path,
+                previous=previous,
+                progress=None if args.quiet else _progress,
+                workers=_workers(args.jobs, "--jobs"),
+            )
     return settings, jobs, result, path
+
+
+@contextlib.contextmanager
+def _mujoco_warnings():
+    """Collect MuJoCo's warnings (printed by default, one per blown-up step) while the block runs, and say in one
+    line how many there were; each diverged case says so in its own row."""
+    import mujoco
+
+    seen: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(seen.append)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(previous)
+        if seen:
+            first = " ".join(seen[0].split())
+            print(f"rigidbench: MuJoCo warned {len(seen)} time(s) (first: {first})", file=sys.stderr)
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -634,7 +653,8 @@ def _cmd_power(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(f"delta = {delta:.0e}: {len(alive)} quantities", file=sys.stderr, flush=True)
         jobs = power.jobs_at(alive, delta)
-        result = runner.run_jobs(jobs, settings, workers=workers)
+        with _mujoco_warnings():
+            result = runner.run_jobs(jobs, settings, workers=workers)
         caught: dict[tuple[str, str], list[str]] = {}
         for job in jobs:
             quantity = job.variant.split("*")[0]
