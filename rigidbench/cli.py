@@ -171,7 +171,7 @@ def _parser() -> argparse.ArgumentParser:
         nargs="+",
         default=[],
         metavar="JSON",
-        help="results of 'rigidbench run --json' and/or 'rigidbench sweep --json'",
+        help="results of 'rigidbench run --json', 'sweep --json', 'power --json' and/or 'census --json'",
     )
     p_report.add_argument("--figures", metavar="DIR", help="also write every figure as a PNG file into DIR")
     p_report.add_argument(
@@ -342,7 +342,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
     outputs.check_all([("--out", args.out)])
     try:
-        runs, sweeps = report.load(args.sources)
+        runs, sweeps, audits = report.load(args.sources)
         jobs = runner.plan(args.targets, {}, runner.settings_for("reference")) if not runs else []
     except ValueError as exc:
         raise UsageError(str(exc)) from None
@@ -358,7 +358,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
                 say(f"[{i + 1}/{len(jobs)}] {jobs[i].name}")
             rows.extend(batch)
         runs = [results.document(rows)]
-    text = report.build(runs, sweeps, progress=say, figure_dir=args.figures, clips=args.clips)
+    text = report.build(runs, sweeps, audits, progress=say, figure_dir=args.figures, clips=args.clips)
     report.write(args.out, text)
     print(f"{args.out}: {len(text) / 1e6:.2f} MB, {text.count('<img ')} figures")
     return EXIT_OK

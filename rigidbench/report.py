@@ -29,30 +29,44 @@ from rigidbench.results import DIVERGED, PASS
 from rigidbench.settings import Settings
 
 
-def load(paths: Sequence[str]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-    """Read result documents (`rigidbench run --json`) and sweep documents (`rigidbench sweep --json`).
+def load(paths: Sequence[str]) -> tuple[list[dict[str, Any]], list[dict[str, Any]], list[dict[str, Any]]]:
+    """Read result documents (`rigidbench run --json`), sweep documents (`rigidbench sweep --json`), and the
+    documents of `rigidbench power --json` and `rigidbench census --json`.
 
     Returns
     -------
-    runs, sweeps : list of dict
+    runs, sweeps, audits : list of dict
+        ``audits`` are the power and census documents, in the order given.
 
     Raises
     ------
     ValueError
-        If a file is missing, not JSON, or not a rigidbench results document.
+        If a file is missing, not JSON, or not a rigidbench document of one of these kinds (naming what is wrong).
     """
-    runs, sweeps = [], []
+    runs, sweeps, audits = [], [], []
     for path in paths:
         try:
             with open(path) as f:
                 doc = json.load(f)
-        except (OSError, json.JSONDecodeError) as exc:
+        except (OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise ValueError(f"--from {path}: {exc}") from None
-        if not isinstance(doc, dict) or "results" not in doc or "mujoco" not in doc:
-            raise ValueError(f"--from {path}: not a rigidbench results or sweep document (no 'results'/'mujoco')")
+        if not isinstance(doc, dict) or "mujoco" not in doc:
+            raise ValueError(f"--from {path}: not a rigidbench document (no 'mujoco')")
+        if doc.get("kind") == "power":
+            _check_list(path, doc.get("limits"), "limits", {"scenario": str, "quantity": str, "caught_by": list})
+            audits.append(doc)
+            continue
+        if doc.get("kind") == "census":
+            _check_list(path, doc.get("draws"), "draws", {"scenario": str, "case": str, "status": str})
+            if not isinstance(doc.get("scenarios"), dict):
+                raise ValueError(f"--from {path}: a census document needs 'scenarios'")
+            audits.append(doc)
+            continue
+        if "results" not in doc:
+            raise ValueError(f"--from {path}: not a rigidbench results or sweep document (no 'results')")
         _check_rows(path, doc["results"])
         (sweeps if doc.get("kind") == "sweep" else runs).append(doc)
-    return runs, sweeps
+    return runs, sweeps, audits
 
 
 # What every result row must hold for the report to read it (`rigidbench.results.rows_of`), with its type.
@@ -67,14 +81,18 @@ def _check_rows(path: str, rows: Any) -> None:
     ValueError
         Naming the file, the row's index and the field.
     """
-    if not isinstance(rows, list):
-        raise ValueError(f"--from {path}: 'results' must be a list of rows, not {type(rows).__name__}")
-    for i, row in enumerate(rows):
-        if not isinstance(row, dict):
-            raise ValueError(f"--from {path}: results[{i}] is not an object")
-        for name, kind in _ROW_FIELDS.items():
-            if not isinstance(row.get(name), kind):
-                raise ValueError(f"--from {path}: results[{i}] has no valid {name!r}")
+    _check_list(path, rows, "results", _ROW_FIELDS)
+
+
+def _check_list(path: str, items: Any, key: str, fields: Mapping[str, type]) -> None:
+    if not isinstance(items, list):
+        raise ValueError(f"--from {path}: {key!r} must be a list, not {type(items).__name__}")
+    for i, item in enumerate(items):
+        if not isinstance(item, dict):
+            raise ValueError(f"--from {path}: {key}[{i}] is not an object")
+        for name, kind in fields.items():
+            if not isinstance(item.get(name), kind):
+                raise ValueError(f"--from {path}: {key}[{i}] has no valid {name!r}")
 
 
 def png(figure: Any, dpi: int = 110) -> bytes:
@@ -134,6 +152,7 @@ def _settings_of(rows: Sequence[Mapping[str, Any]]) -> Settings | None:
 def build(
     runs: Sequence[Mapping[str, Any]],
     sweeps: Sequence[Mapping[str, Any]] = (),
+    audits: Sequence[Mapping[str, Any]] = (),
     *,
     progress: Callable[[str], None] | None = None,
     figure_dir: str | None = None,
@@ -147,6 +166,8 @@ def build(
         Their rows make the results table; each scenario present gets its figures.
     sweeps : sequence of sweep documents
         Each gets its convergence figures and order table.
+    audits : sequence of power and census documents
+        Each gets its table: the detection limits, or the census's tally and refusal reasons.
     figure_dir : str, optional
         Also write every figure there as ``NN-<slug>.png`` (for looking at them one by one).
     clips : bool
@@ -194,10 +215,10 @@ def build(
             ext = "gif" if data[:3] == b"GIF" else "png"
             with open(os.path.join(figure_dir, f"{i:02d}-{slug}.{ext}"), "wb") as f:
                 f.write(data)
-    return _page(rows, runs, sweeps, versions, figures)
+    return _page(rows, runs, sweeps, versions, figures, audits)
 
 
-def _page(rows, runs, sweeps, versions, figures) -> str:
+def _page(rows, runs, sweeps, versions, figures, audits=()) -> str:
     from rigidbench import __version__
 
     all_slugs = list(dict.fromkeys([*(r["scenario"] for r in rows), *(s for s, _f, _d in figures)]))
@@ -236,12 +257,70 @@ def _page(rows, runs, sweeps, versions, figures) -> str:
         out += [f"<h2>Observed orders of convergence (mujoco {html.escape(doc['mujoco'])})</h2>", _orders_table(doc)]
         if doc.get("fit_rule"):
             out.append(f"<details><summary>Fit rule</summary><pre>{html.escape(doc['fit_rule'])}</pre></details>")
+    for doc in audits:
+        out += _power_section(doc) if doc["kind"] == "power" else _census_section(doc)
     out += [
         '<footer id=selfcheck data-images-ok="" data-errors="">checking images...</footer>',
         f"<script>{_JS}</script>",
         "</body></html>",
     ]
     return "\n".join(out) + "\n"
+
+
+def _table(header: Sequence[str], lines: Sequence[Sequence[Any]]) -> str:
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in line) + "</tr>" for line in lines)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def _power_section(doc: Mapping[str, Any]) -> list[str]:
+    """The detection limits of `rigidbench power`: one row per scenario and simulated quantity."""
+    lines = []
+    for lim in doc["limits"]:
+        detected = f"{lim['detected']:.0e}" if lim.get("detected") else "> 1e-02"
+        theory = lim.get("theory_sensitivity")
+        lines.append(
+            (
+                lim["scenario"],
+                lim["quantity"],
+                detected,
+                ", ".join(lim["caught_by"][:3]) or "-",
+                f"{theory:.0e}" if theory else "> 1e-02 (independent of it)",
+            )
+        )
+    intro = (
+        "Each quantity of the simulated model was scaled by 1 + delta while the prediction and the measurement kept "
+        "the unperturbed model; <i>detected at</i> is the smallest delta (1e-2 .. 1e-8, by decades) at which some "
+        "check failed; <i>theory moves at</i> is the delta at which the prediction itself moves by a tolerance."
+    )
+    complete = "" if doc.get("complete", True) else " (interrupted: incomplete)"
+    return [
+        f"<h2>Detection limits: rigidbench power (mujoco {html.escape(doc['mujoco'])}, profile "
+        f"{html.escape(str(doc.get('profile')))}){complete}</h2>",
+        f"<p>{intro}</p>",
+        _table(("scenario", "quantity", "detected at", "caught by", "theory moves at"), lines),
+    ]
+
+
+def _census_section(doc: Mapping[str, Any]) -> list[str]:
+    """The tally of `rigidbench census` and its refusals by reason."""
+    keys = ("drawn", "refused", "passed", "failed", "crashed")
+    lines = [(slug, *(t.get(k, 0) for k in keys)) for slug, t in doc["scenarios"].items()]
+    reasons = [(slug, reason, n) for slug, t in doc["scenarios"].items() for reason, n in t.get("refusals", {}).items()]
+    bad = [d for d in doc["draws"] if d["status"] in ("failed", "crashed")]
+    out = [
+        f"<h2>Census: {doc.get('n')} draws per scenario, seed {doc.get('seed')} (mujoco "
+        f"{html.escape(doc['mujoco'])})</h2>",
+        _table(("scenario", *keys), lines),
+    ]
+    if reasons:
+        out += ["<p>Refused before simulating, by reason:</p>", _table(("scenario", "reason", "draws"), reasons)]
+    if bad:
+        out += [
+            "<p>Failed or crashed draws:</p>",
+            _table(("status", "command"), [(d["status"], d.get("command", "")) for d in bad]),
+        ]
+    return out
 
 
 def _settings_table(rows) -> str:

@@ -162,7 +162,7 @@ def test_clips_embed_a_moving_gif_per_scenario(documents, gl_available):
 
     from rigidbench import report
 
-    runs, _ = report.load(documents[:1])
+    runs, _, _ = report.load(documents[:1])
     page = report.build(runs, clips=True)
     gifs = re.findall(r'<img alt="Clip: heavy-top:nutation" src="data:image/gif;base64,([A-Za-z0-9+/=]+)">', page)
     assert len(gifs) == 1
@@ -182,3 +182,66 @@ def test_report_of_fresh_contact_results_renders_their_settings_and_figures():
     page = report.build([results.document(rows)])
     assert "<h2>Settings</h2>" in page and "<td>((-100000000.0, 0.0),)</td>" in page
     assert "Ball on a free stick: velocities after the impact" in page
+
+
+@pytest.mark.parametrize(
+    "doc, words",
+    [
+        ({"mujoco": "4.0.0", "results": {"a": 1}}, "'results' must be a list"),
+        ({"mujoco": "4.0.0", "results": [{"scenario": "pendulum", "case": "x", "check": "period"}]}, "'status'"),
+        ({"mujoco": "4.0.0", "results": [42]}, "results[0] is not an object"),
+        ({"mujoco": "4.0.0", "kind": "power", "limits": [{"scenario": "x"}]}, "limits[0]"),
+    ],
+    ids=["results-not-a-list", "row-without-status", "row-42", "power-without-quantity"],
+)
+def test_report_from_a_malformed_document_is_one_line_and_exit_2(tmp_path, capsys, doc, words):
+    from rigidbench import cli
+
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(doc))
+    assert cli.main(["report", "--from", str(path), "--out", str(tmp_path / "r.html")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and words in err and "bad.json" in err
+    assert not (tmp_path / "r.html").exists()
+
+
+def test_report_shows_the_power_and_census_tables(tmp_path):
+    from rigidbench import report, results
+
+    power = {
+        "kind": "power",
+        "mujoco": "4.0.0",
+        "profile": "reference",
+        "limits": [
+            {
+                "scenario": "pendulum",
+                "quantity": "g",
+                "detected": 1e-8,
+                "caught_by": ["one-radian:energy-drift"],
+                "theory_sensitivity": 1e-5,
+            },
+        ],
+    }
+    census = {
+        "kind": "census",
+        "mujoco": "4.0.0",
+        "n": 2,
+        "seed": 1,
+        "scenarios": {
+            "pendulum": {
+                "drawn": 2,
+                "refused": 1,
+                "passed": 1,
+                "failed": 0,
+                "crashed": 0,
+                "refusals": {"small-oscillation": 1},
+            }
+        },
+        "draws": [{"scenario": "pendulum", "case": "one-radian", "status": "passed"}],
+    }
+    for name, doc in (("p.json", power), ("c.json", census)):
+        (tmp_path / name).write_text(json.dumps(doc))
+    runs, sweeps, audits = report.load([str(tmp_path / "p.json"), str(tmp_path / "c.json")])
+    page = report.build([results.document([])], sweeps, audits)
+    assert "Detection limits" in page and "one-radian:energy-drift" in page
+    assert "Census: 2 draws per scenario, seed 1" in page and "small-oscillation" in page
