@@ -26,7 +26,7 @@ class UsageError(Exception):
 
 def _parser() -> argparse.ArgumentParser:
     from rigidbench import __version__
-    from rigidbench.settings import INTEGRATORS, PROFILES
+    from rigidbench.settings import INTEGRATORS
 
     parser = argparse.ArgumentParser(
         prog="rigidbench",
@@ -42,7 +42,7 @@ def _parser() -> argparse.ArgumentParser:
     p_run.add_argument(
         "targets", nargs="*", metavar="TARGET", help="'scenario' or 'scenario:case' (default: every scenario)"
     )
-    p_run.add_argument("--profile", default="reference", help=f"settings profile: {', '.join(PROFILES)}")
+    _settings_arguments(p_run)
     p_run.add_argument(
         "--set",
         dest="sets",
@@ -51,8 +51,6 @@ def _parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="override a parameter (SI units; vectors comma-separated, e.g. omega=0.1,5,0.1); repeatable",
     )
-    p_run.add_argument("--integrator", help=f"override the integrator: {', '.join(INTEGRATORS)}")
-    p_run.add_argument("--timestep", type=_positive_float, metavar="SECONDS", help="override the timestep (s)")
     p_run.add_argument("--json", metavar="PATH", help="write the results as JSON")
     p_run.add_argument(
         "--jsonl", metavar="PATH", help="journal: append each finished row as a JSON line as the run goes (resumable)"
@@ -107,6 +105,7 @@ def _parser() -> argparse.ArgumentParser:
         type=_positive_int,
         help="worker processes (default: the CPUs available, at most that many; 1 = in process)",
     )
+    _settings_arguments(p_sweep, grid=True)
     p_sweep.add_argument("--errors", action="store_true", help="also print the error at every grid point")
     p_sweep.add_argument("--json", metavar="PATH", help="write every point's rows and the fitted orders as JSON")
     p_sweep.add_argument(
@@ -130,7 +129,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     p_census.add_argument("--n", type=_positive_int, default=20, help="draws per target (default 20)")
     p_census.add_argument("--seed", type=_nonnegative_int, default=0, help="seed of the draws (default 0)")
-    p_census.add_argument("--profile", default="reference", help=f"settings profile: {', '.join(PROFILES)}")
+    _settings_arguments(p_census)
     p_census.add_argument("--json", metavar="PATH", help="write every draw, its verdict and the tally as JSON")
     p_census.add_argument(
         "--jsonl", metavar="PATH", help="journal: append each finished draw's rows as JSON lines (resumable)"
@@ -149,10 +148,30 @@ def _parser() -> argparse.ArgumentParser:
         "itself moves by a tolerance. Exit 0 (the table is the result).",
     )
     p_power.add_argument("targets", nargs="*", metavar="SCENARIO", help="scenarios (default: every scenario)")
-    p_power.add_argument("--profile", default="reference", help=f"settings profile: {', '.join(PROFILES)}")
+    _settings_arguments(p_power)
     p_power.add_argument("--json", metavar="PATH", help="write the limits as JSON")
     p_power.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p_power.add_argument("--jobs", type=_positive_int, metavar="N", help="cases simulated at once (default: CPUs)")
+
+    p_compare = sub.add_parser(
+        "compare",
+        help="regressions between two runs: each check's error before and after, newly failing or passing",
+        description="Match the checks of two 'rigidbench run --json' results (e.g. a pinned baseline and a run on a "
+        "new MuJoCo) and print each one that changed: newly failing or passing, error grown or shrunk by more than "
+        "the noise band (errors at round-off never count), rows missing on either side. Exit 1 when anything is "
+        "newly failing, regressed or missing, 0 otherwise.",
+    )
+    p_compare.add_argument("base", metavar="BASE.json", help="the baseline results")
+    p_compare.add_argument("new", metavar="NEW.json", help="the results to check against it")
+    p_compare.add_argument(
+        "--band",
+        type=float,
+        default=2.0,
+        metavar="FACTOR",
+        help="noise band: an error counts as changed when it moves by more than this factor (default 2)",
+    )
+    p_compare.add_argument("--markdown", metavar="PATH", help="also write the table as Markdown (a CI job summary)")
+    p_compare.add_argument("--json", metavar="PATH", help="also write every check's comparison as JSON")
 
     p_report = sub.add_parser(
         "report",
@@ -187,18 +206,63 @@ def _parser() -> argparse.ArgumentParser:
     )
     p_render.add_argument("target", metavar="TARGET", help="'scenario' (its first case) or 'scenario:case'")
     p_render.add_argument("--out", required=True, metavar="FILE", help="output file: .gif, .mp4 or .png")
-    p_render.add_argument("--profile", default="reference", help=f"settings profile: {', '.join(PROFILES)}")
+    _settings_arguments(p_render)
     p_render.add_argument(
         "--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="override a parameter"
     )
-    p_render.add_argument("--integrator", help=f"override the integrator: {', '.join(INTEGRATORS)}")
-    p_render.add_argument("--timestep", type=_positive_float, metavar="SECONDS", help="override the timestep (s)")
     p_render.add_argument("--frames", type=int, default=90, help="frames over the run (default 90)")
     p_render.add_argument("--fps", type=_positive_float, default=30.0, help="playback frames per second (default 30)")
     p_render.add_argument("--size", default="480x360", metavar="WxH", help="pixels (default 480x360)")
     p_render.add_argument("--at", type=float, metavar="SECONDS", help="for .png: the simulated time (default 0)")
     p_render.add_argument("--no-trail", action="store_true", help="do not draw the centre-of-mass trail")
     return parser
+
+
+def _settings_arguments(p: argparse.ArgumentParser, *, grid: bool = False) -> None:
+    """The options every simulating command takes to choose its settings (merged in the order listed)."""
+    from rigidbench.settings import FLAGS, INTEGRATORS, OPTIONS, profile_names
+
+    p.add_argument(
+        "--profile",
+        default="reference",
+        help=f"settings profile: {', '.join(profile_names())}, or a profile file (*.toml) (default: reference)",
+    )
+    p.add_argument(
+        "--settings-from",
+        metavar="MODEL.xml[#CLASS]",
+        help="take <option>, <flag> and the default class's contact softness from your own MJCF",
+    )
+    p.add_argument(
+        "--option",
+        dest="options",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help=f"a MuJoCo option ({', '.join(OPTIONS)}), a flag (NAME=enable|disable: {', '.join(FLAGS)}), or "
+        "solref=A,B / solimp=A,B,C[,D,E] for every contact and equality constraint; repeatable",
+    )
+    p.add_argument("--solref", metavar="A,B", help="shorthand for --option solref=A,B")
+    p.add_argument("--solimp", metavar="A,B,C[,D,E]", help="shorthand for --option solimp=...")
+    if not grid:
+        p.add_argument("--integrator", help=f"shorthand for --option integrator=NAME: {', '.join(INTEGRATORS)}")
+        p.add_argument("--timestep", type=_positive_float, metavar="SECONDS", help="shorthand for --option timestep=")
+
+
+def _settings(args: argparse.Namespace):
+    """The command's settings (`runner.settings_for`), from its settings arguments."""
+    from rigidbench import runner
+
+    options = _parse_pairs(args.options, "--option")
+    for name in ("solref", "solimp"):
+        if getattr(args, name, None):
+            options[name] = getattr(args, name)
+    return runner.settings_for(
+        args.profile,
+        getattr(args, "integrator", None),
+        getattr(args, "timestep", None),
+        settings_from=args.settings_from,
+        options=options,
+    )
 
 
 def _positive_float(text: str) -> float:
@@ -232,11 +296,15 @@ def _nonnegative_int(text: str) -> int:
 
 
 def _parse_sets(items: Sequence[str]) -> dict[str, str]:
+    return _parse_pairs(items, "--set")
+
+
+def _parse_pairs(items: Sequence[str], option: str) -> dict[str, str]:
     out: dict[str, str] = {}
     for item in items:
         name, sep, value = item.partition("=")
         if not sep or not name.strip() or not value.strip():
-            raise UsageError(f"--set expects NAME=VALUE, got {item!r}")
+            raise UsageError(f"{option} expects NAME=VALUE, got {item!r}")
         out[name.strip()] = value.strip()
     return out
 
@@ -267,6 +335,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
                 integrators=args.integrators,
                 timesteps=args.timesteps,
                 params=_parse_sweeps(args.params, args.stiffness),
+                base=_settings(args),
             )
         except ValueError as exc:
             raise UsageError(str(exc)) from None
@@ -337,6 +406,24 @@ def _human(*paths: str | None) -> TextIO:
     return sys.stderr if "-" in paths else sys.stdout
 
 
+def _cmd_compare(args: argparse.Namespace) -> int:
+    from rigidbench import compare, outputs
+
+    outputs.check_all([("--markdown", args.markdown), ("--json", args.json)])
+    try:
+        base, new = compare.load(args.base), compare.load(args.new)
+        changes = compare.compare(base["results"], new["results"], args.band)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    print(compare.table(changes, base, new, args.band), file=_human(args.markdown, args.json))
+    if args.markdown:
+        outputs.write(args.markdown, compare.markdown(changes, base, new, args.band), "--markdown")
+    if args.json:
+        doc = {"kind": "compare", "band": args.band, "changes": [c.record() for c in changes]}
+        outputs.write(args.json, _dumps(doc), "--json")
+    return EXIT_FAIL if compare.regressed(changes) else EXIT_OK
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from rigidbench import outputs, plots, report, results, runner
 
@@ -368,11 +455,11 @@ def _cmd_render(args: argparse.Namespace) -> int:
     import os
     import subprocess
 
-    from rigidbench import outputs, render, runner
+    from rigidbench import outputs, render
 
     outputs.check_all([("--out", args.out)])
     try:
-        settings = runner.settings_for(args.profile, args.integrator, args.timestep)
+        settings = _settings(args)
         width, _, height = args.size.lower().partition("x")
         try:
             size = (int(width), int(height))
@@ -451,14 +538,21 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 
 # What a journal restores on --resume: what to run, never where to write (issue 20), with the types it must have.
+_SETTINGS_INVOCATION = {
+    "profile": (str, None),
+    "settings_from": ((str, type(None)), None),
+    "options": (list, str),
+    "solref": ((str, type(None)), None),
+    "solimp": ((str, type(None)), None),
+}
 _RUN_INVOCATION = {
     "targets": (list, str),
-    "profile": (str, None),
     "sets": (list, str),
     "integrator": ((str, type(None)), None),
     "timestep": ((float, int, type(None)), None),
+    **_SETTINGS_INVOCATION,
 }
-_CENSUS_INVOCATION = {"targets": (list, str), "n": (int, None), "seed": (int, None), "profile": (str, None)}
+_CENSUS_INVOCATION = {"targets": (list, str), "n": (int, None), "seed": (int, None), **_SETTINGS_INVOCATION}
 
 
 def _invocation(args: argparse.Namespace, schema: dict = _RUN_INVOCATION) -> dict:
@@ -562,7 +656,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     outputs.check_all([("--json", args.json), ("--junit", args.junit), ("--jsonl", args.jsonl or args.resume)])
 
     def plan():
-        settings = runner.settings_for(args.profile, args.integrator, args.timestep)
+        settings = _settings(args)
         return settings, runner.plan(args.targets, _parse_sets(args.sets), settings)
 
     t0 = time.perf_counter()
@@ -597,13 +691,13 @@ def _progress(i: int, n: int, job) -> None:
 def _cmd_census(args: argparse.Namespace) -> int:
     import mujoco
 
-    from rigidbench import census, outputs, runner
+    from rigidbench import census, outputs
 
     outputs.check_all([("--json", args.json), ("--jsonl", args.jsonl or args.resume)])
     drawn: list = []
 
     def plan():
-        settings = runner.settings_for(args.profile)
+        settings = _settings(args)
         if not args.quiet:
             print("drawing and checking parameter sets ...", file=sys.stderr, flush=True)
         draws, jobs = census.plan(args.targets, n=args.n, seed=args.seed, settings=settings)
@@ -638,7 +732,7 @@ def _cmd_power(args: argparse.Namespace) -> int:
 
     outputs.check_all([("--json", args.json)])
     try:
-        settings = runner.settings_for(args.profile)
+        settings = _settings(args)
         pairs = power.plan(args.targets, settings)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
@@ -753,6 +847,7 @@ def _main(argv: Sequence[str] | None) -> int:
         except ValueError as exc:
             raise UsageError(str(exc)) from None
     commands = {
+        "compare": _cmd_compare,
         "report": _cmd_report,
         "render": _cmd_render,
         "sweep": _cmd_sweep,

@@ -139,15 +139,31 @@ def plan(
     return jobs
 
 
-def settings_for(profile_name: str, integrator: str | None = None, timestep: float | None = None) -> Settings:
-    """The named profile with command-line overrides on top.
+def settings_for(
+    profile_name: str,
+    integrator: str | None = None,
+    timestep: float | None = None,
+    *,
+    settings_from: str | None = None,
+    options: Mapping[str, str] | None = None,
+) -> Settings:
+    """The settings a command runs under, merged in this order (each overriding the one before): the profile (a
+    name or a profile file), a user's MJCF (`settings.from_model`), ``--option NAME=VALUE`` (including
+    ``solref``/``solimp`` and flags), then the shorthands ``--integrator`` and ``--timestep``.
 
     Raises
     ------
     ValueError
-        For an unknown profile or integrator, or a timestep outside (0, 0.1] s.
+        For an unknown profile, option, flag or value, or a model that cannot be carried over (naming it).
     """
-    return profile(profile_name).merged(Settings(integrator=integrator, timestep=timestep))
+    from rigidbench.settings import from_model
+
+    settings = profile(profile_name)
+    if settings_from:
+        settings = settings.merged(from_model(settings_from))
+    if options:
+        settings = settings.merged(Settings.from_options(options))
+    return settings.merged(Settings(integrator=integrator, timestep=timestep))
 
 
 def run_job(job: Job, settings: Settings | None) -> list[dict[str, Any]]:

@@ -31,8 +31,9 @@ from rigidbench.settings import INTEGRATORS, MAX_TIMESTEP, Settings
 
 # Nominal global order of accuracy of MuJoCo's integrators. Euler is semi-implicit (symplectic) Euler: first
 # order; `implicit` and `implicitfast` are first-order implicit-in-velocity Euler variants; RK4 is the classic
-# fourth-order Runge-Kutta.
-NOMINAL_ORDER = {"Euler": 1, "implicit": 1, "implicitfast": 1, "RK4": 4}
+# fourth-order Runge-Kutta; MuJoCo 4.0's `discrete` merges the constraint solve into the implicit velocity update
+# (first order).
+NOMINAL_ORDER = {"Euler": 1, "implicit": 1, "implicitfast": 1, "RK4": 4, "discrete": 1}
 
 # The default timestep ladder: dt_ref * 2^k, k = k_min .. LADDER_TOP, dt_ref the case's reference timestep
 # (`reference`).
@@ -70,18 +71,22 @@ class Point:
     integrator: str
     timestep: float
     param: tuple[tuple[str, float], ...] = ()
+    base: Settings = Settings()  # the user's settings the grid varies on (profile, --option, --settings-from)
 
     def settings(self) -> Settings:
-        return Settings(integrator=self.integrator, timestep=self.timestep)
+        return self.base.merged(Settings(integrator=self.integrator, timestep=self.timestep))
 
     def record(self) -> dict[str, Any]:
-        return {
+        out = {
             "scenario": self.scenario,
             "case": self.case,
             "integrator": self.integrator,
             "timestep": self.timestep,
             "param": dict(self.param),
         }
+        if self.base != Settings():
+            out["base"] = self.base.record()
+        return out
 
 
 @dataclass(frozen=True)
@@ -319,6 +324,7 @@ def plan(
     integrators: Sequence[str] | None = None,
     timesteps: Sequence[float] | None = None,
     params: Mapping[str, Sequence[float]] | None = None,
+    base: Settings | None = None,
 ) -> list[Point]:
     """The grid: for each case of each target, integrators x timesteps x swept parameter values.
 
@@ -327,20 +333,23 @@ def plan(
     targets : sequence of str
         ``scenario`` or ``scenario:case``; none = every registered scenario.
     integrators : sequence of str, optional
-        Default: all four.
+        Default: every integrator of `NOMINAL_ORDER` this MuJoCo has.
     timesteps : sequence of float, optional
         Seconds. Default: `ladder` of each case's reference timestep and duration (`reference`).
     params : mapping of str to sequence of float, optional
         Parameters to sweep (SI units), e.g. ``{"stiffness": [1e5, 1e6, 1e7]}``; their values multiply the grid.
         A scenario with a ``stiffness`` parameter that is not named here sweeps it over its default x 10^(-1, 0,
         1): contact stiffness is one of the settings a user chooses.
+    base : Settings, optional
+        The settings every point runs under before its integrator and timestep (a profile, --option, ...).
 
     Raises
     ------
     ValueError
         For an unknown scenario, case, integrator or parameter, or a value out of range (naming it).
     """
-    integrators = list(integrators or NOMINAL_ORDER)
+    base = base or Settings()
+    integrators = list(integrators or [name for name in NOMINAL_ORDER if name in INTEGRATORS])
     for name in integrators:
         if name not in INTEGRATORS:
             raise ValueError(f"integrator {name!r} is not one of {', '.join(INTEGRATORS)}")
@@ -372,7 +381,7 @@ def plan(
                     raise ValueError(f"{scenario.slug}:{case}: {exc}") from None
                 for integrator in integrators:
                     for dt in steps:
-                        points.append(Point(scenario.slug, case, integrator, float(dt), combo))
+                        points.append(Point(scenario.slug, case, integrator, float(dt), combo, base))
     return points
 
 
