@@ -4,8 +4,13 @@ Returns a `dm_control.rl.control.Environment` whose `Physics` is built from the 
 same MjSpec path as every other view) and whose `base.Task` delegates initial state, observation, action and
 reward to the scenario and its gymnasium env's hooks: nothing is re-implemented here.
 
-Needs the ``dm`` extra (``pip install -e ".[dm]"``): dm-control 1.0.50 fails on mujoco 4.0 (``flex_vertedge``),
-so that extra pins mujoco to 3.17.
+Needs the ``dm`` extra (``pip install -e ".[dm]"``). dm-control 1.0.50 was generated against MuJoCo 3.17: its table
+of array sizes (``dm_control/mujoco/wrapper/mjbindings/sizes.py``) lists nine flexvert fields MuJoCo 4.0 removed
+(``flex_vertedge``, ``flex_vertedgeadr``, ``flex_vertedgenum``, ``flex_vertmetric``, ``flexvert_J_rownnz``,
+``flexvert_J_rowadr``, ``flexvert_J_colind`` on the model; ``flexvert_length``, ``flexvert_J`` on the data), and
+building a `Physics` calls ``getattr`` on every entry. `fit_dm_control_to_mujoco` drops exactly the entries the
+installed MuJoCo lacks, before any dm_control Physics is built or `dm_control.mjcf` is imported (importing this
+module does it): with MuJoCo 3.17, or once dm_control catches up, it drops nothing.
 """
 
 from __future__ import annotations
@@ -17,16 +22,39 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from rigidbench import registry
+from rigidbench.settings import profile as _profile
+
+
+def fit_dm_control_to_mujoco() -> dict[str, list[str]]:
+    """Drop from dm_control's generated table of array sizes the fields the installed MuJoCo does not have.
+
+    Returns
+    -------
+    dict of str to list of str
+        The dropped fields, by struct (``mjmodel``, ``mjdata``); empty lists when dm_control matches MuJoCo.
+    """
+    from dm_control.mujoco.wrapper.mjbindings import sizes
+
+    model = mujoco.MjModel.from_xml_string("<mujoco/>")
+    structs = {"mjmodel": model, "mjdata": mujoco.MjData(model)}
+    dropped: dict[str, list[str]] = {}
+    for struct, instance in structs.items():
+        fields = sizes.array_sizes.get(struct, {})
+        dropped[struct] = [name for name in fields if not hasattr(instance, name)]
+        for name in dropped[struct]:
+            del fields[name]
+    return dropped
+
+
 try:
-    from dm_control import mujoco as dm_mujoco
+    DROPPED = fit_dm_control_to_mujoco()
+    from dm_control import mujoco as dm_mujoco  # noqa: E402 - after the size table is fitted
     from dm_control.rl import control
     from dm_control.suite import base
     from dm_env import specs
 except ImportError as exc:  # pragma: no cover - exercised without the extra
-    raise ImportError("rigidbench.suite needs dm-control: pip install -e '.[dm]' (it pins mujoco to 3.17)") from exc
-
-from rigidbench import registry
-from rigidbench.settings import profile as _profile
+    raise ImportError("rigidbench.suite needs dm-control: pip install -e '.[dm]'") from exc
 
 
 class Physics(dm_mujoco.Physics):

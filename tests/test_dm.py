@@ -148,3 +148,37 @@ def test_dm_control_suite_refuses_an_id_that_is_not_a_closed_loop_task():
         suite.load("rigidbench/HeavyTop-v0")
     with pytest.raises(ValueError, match="takes no case"):
         suite.load("rigidbench/TopPrecession-v0", "nutation")
+
+
+def test_dm_control_on_this_mujoco_drops_only_the_fields_mujoco_lacks():
+    """The compatibility layer removes exactly the size-table entries the installed MuJoCo has no field for (the
+    nine flexvert fields on 4.0, none on 3.17), and dm_control's own suite then loads and steps on it."""
+    pytest.importorskip("dm_control", reason="needs the dm extra")
+    from dm_control import suite as dm_suite
+    from dm_control.mujoco.wrapper.mjbindings import sizes
+
+    from rigidbench import suite
+
+    model = mujoco.MjModel.from_xml_string("<mujoco/>")
+    data = mujoco.MjData(model)
+    for struct, instance in (("mjmodel", model), ("mjdata", data)):
+        assert all(hasattr(instance, name) for name in sizes.array_sizes[struct])
+        assert not any(hasattr(instance, name) for name in suite.DROPPED[struct])
+    if mujoco.__version__.startswith("4."):
+        assert sorted(suite.DROPPED["mjmodel"] + suite.DROPPED["mjdata"]) == sorted(
+            [
+                "flex_vertedge",
+                "flex_vertedgeadr",
+                "flex_vertedgenum",
+                "flex_vertmetric",
+                "flexvert_J_colind",
+                "flexvert_J_rowadr",
+                "flexvert_J_rownnz",
+                "flexvert_J",
+                "flexvert_length",
+            ]
+        )
+    assert suite.fit_dm_control_to_mujoco() == {"mjmodel": [], "mjdata": []}  # a second call finds nothing
+    env = dm_suite.load("cartpole", "swingup")
+    env.reset()
+    env.step(np.zeros(env.action_spec().shape))
