@@ -28,7 +28,8 @@ def _early_signals() -> None:
             signal.signal(sig, stop)
 
 
-if _cli_starting():
+_CLI = _cli_starting()
+if _CLI:
     _early_signals()
 
 # MuJoCo picks its OpenGL backend when it is first imported: default to EGL on a machine with no display.
@@ -37,8 +38,22 @@ if "MUJOCO_GL" not in _os.environ and not _os.environ.get("DISPLAY"):
 
 __version__ = "0.1.0"
 
-from rigidbench.registry import get, register_envs, scenarios  # noqa: E402
 
-register_envs()
+def __getattr__(name: str):
+    """`get`, `scenarios` and `register_envs` of `rigidbench.registry`, imported on first use."""
+    if name in ("get", "scenarios", "register_envs"):
+        from rigidbench import registry
+
+        return getattr(registry, name)
+    raise AttributeError(f"module 'rigidbench' has no attribute {name!r}")
+
+
+# Importing the package registers the gymnasium environments (which imports every scenario). The command line
+# does not use gymnasium's registry, so it skips that and starts in a fraction of the time (`rigidbench.cli`
+# registers them itself where a command needs them).
+if not _CLI:
+    from rigidbench.registry import register_envs as _register
+
+    _register()
 
 __all__ = ["__version__", "get", "scenarios"]
