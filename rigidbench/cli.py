@@ -26,7 +26,6 @@ class UsageError(Exception):
 
 def _parser() -> argparse.ArgumentParser:
     from rigidbench import __version__
-    from rigidbench.settings import INTEGRATORS
 
     parser = argparse.ArgumentParser(
         prog="rigidbench",
@@ -63,12 +62,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     p_run.add_argument("--junit", metavar="PATH", help="write the results as JUnit XML")
     p_run.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    p_run.add_argument(
-        "--jobs",
-        type=_positive_int,
-        metavar="N",
-        help="cases simulated at once, on threads (default: the CPUs available); results are the same for any N",
-    )
+    _jobs_argument(p_run, "cases simulated at once, on threads")
 
     p_sweep = sub.add_parser(
         "sweep",
@@ -78,43 +72,32 @@ def _parser() -> argparse.ArgumentParser:
         "integrators x dt_ref * 2^k, k = -3..9 (fewer below 0 for long cases), dt_ref the case's reference "
         "timestep (which follows its parameters).",
     )
-    p_sweep.add_argument(
-        "targets", nargs="*", metavar="TARGET", help="'scenario' or 'scenario:case' (default: every scenario)"
-    )
-    p_sweep.add_argument("--integrators", nargs="+", metavar="NAME", help=f"default: all of {', '.join(INTEGRATORS)}")
-    p_sweep.add_argument(
-        "--timesteps",
-        nargs="+",
-        type=_positive_float,
-        metavar="SECONDS",
-        help="default: dt_ref * 2^k, k = -3..9, per case",
-    )
-    p_sweep.add_argument(
-        "--param",
-        dest="params",
-        action="append",
-        default=[],
-        metavar="NAME=V1,V2,...",
-        help="sweep a numeric parameter over these values (SI units), e.g. stiffness=1e5,1e6,1e7; repeatable",
-    )
-    p_sweep.add_argument(
-        "--stiffness", metavar="K1,K2,...", help="shorthand for --param stiffness=K1,K2,... (contact scenarios)"
-    )
-    p_sweep.add_argument(
-        "--workers",
-        type=_positive_int,
-        help="worker processes (default: the CPUs available, at most that many; 1 = in process)",
-    )
-    _settings_arguments(p_sweep, grid=True)
+    _grid_arguments(p_sweep)
+    _jobs_argument(p_sweep, "worker processes")
     p_sweep.add_argument("--errors", action="store_true", help="also print the error at every grid point")
-    p_sweep.add_argument("--json", metavar="PATH", help="write every point's rows and the fitted orders as JSON")
-    p_sweep.add_argument(
-        "--jsonl", metavar="PATH", help="journal: append each finished point's rows as JSON lines (resumable)"
+
+    p_frontier = sub.add_parser(
+        "frontier",
+        help="speed against accuracy: each setting's error and measured cost, the Pareto front, the cheapest "
+        "settings for a wanted accuracy",
+        description="The sweep's grid (the same flags and settings), with the cost of every point measured: CPU "
+        "seconds of stepping per simulated second (only the stepping is timed; >= 0.2 s and >= 3 repeats per "
+        "point, median and spread kept). Prints every setting's error (theory checks) and drift (conserved "
+        "quantities) against its cost, marks the Pareto front (* where a cost spread makes membership marginal), "
+        "and, for each --target-error E, the cheapest setting whose error is at most E and how much cheaper it is "
+        "than the scenario's reference settings.",
     )
-    p_sweep.add_argument(
-        "--resume", metavar="PATH", help="skip the points already journaled in PATH (same grid) and append the rest"
+    _grid_arguments(p_frontier)
+    _jobs_argument(p_frontier, "worker processes (each times its own points; at most one per CPU)")
+    p_frontier.add_argument(
+        "--target-error",
+        nargs="+",
+        type=float,
+        metavar="E",
+        help="errors to find the cheapest settings for (default: 1e-3 1e-6 1e-9)",
     )
-    p_sweep.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p_frontier.add_argument("--markdown", metavar="PATH", help="write the cheapest-settings table as Markdown")
+    p_frontier.add_argument("--figures", metavar="DIR", help="write one speed-accuracy plot per scenario (PNG)")
 
     p_census = sub.add_parser(
         "census",
@@ -136,7 +119,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     p_census.add_argument("--resume", metavar="PATH", help="continue the census journaled in PATH")
     p_census.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    p_census.add_argument("--jobs", type=_positive_int, metavar="N", help="cases simulated at once (default: CPUs)")
+    _jobs_argument(p_census, "cases simulated at once, on threads")
 
     p_power = sub.add_parser(
         "power",
@@ -151,7 +134,7 @@ def _parser() -> argparse.ArgumentParser:
     _settings_arguments(p_power)
     p_power.add_argument("--json", metavar="PATH", help="write the limits as JSON")
     p_power.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    p_power.add_argument("--jobs", type=_positive_int, metavar="N", help="cases simulated at once (default: CPUs)")
+    _jobs_argument(p_power, "cases simulated at once, on threads")
 
     p_compare = sub.add_parser(
         "compare",
@@ -216,6 +199,56 @@ def _parser() -> argparse.ArgumentParser:
     p_render.add_argument("--at", type=float, metavar="SECONDS", help="for .png: the simulated time (default 0)")
     p_render.add_argument("--no-trail", action="store_true", help="do not draw the centre-of-mass trail")
     return parser
+
+
+def _jobs_argument(p: argparse.ArgumentParser, what: str) -> None:
+    """One name for "how many at once" on every command (``--workers`` is kept as an alias)."""
+    p.add_argument(
+        "--jobs",
+        "--workers",
+        dest="jobs",
+        type=_positive_int,
+        metavar="N",
+        help=f"{what} (default: the CPUs available; capped there, so timings never share a core); "
+        "results are the same for any N",
+    )
+
+
+def _grid_arguments(p: argparse.ArgumentParser) -> None:
+    """The grid of a sweep (and of a frontier, its view)."""
+    from rigidbench.settings import INTEGRATORS
+
+    p.add_argument(
+        "targets", nargs="*", metavar="TARGET", help="'scenario' or 'scenario:case' (default: every scenario)"
+    )
+    p.add_argument("--integrators", nargs="+", metavar="NAME", help=f"default: all of {', '.join(INTEGRATORS)}")
+    p.add_argument(
+        "--timesteps",
+        nargs="+",
+        type=_positive_float,
+        metavar="SECONDS",
+        help="default: dt_ref * 2^k, k = -3..9, per case",
+    )
+    p.add_argument(
+        "--param",
+        dest="params",
+        action="append",
+        default=[],
+        metavar="NAME=V1,V2,...",
+        help="sweep a numeric parameter over these values (SI units), e.g. stiffness=1e5,1e6,1e7; repeatable",
+    )
+    p.add_argument(
+        "--stiffness", metavar="K1,K2,...", help="shorthand for --param stiffness=K1,K2,... (contact scenarios)"
+    )
+    p.add_argument("--json", metavar="PATH", help="write every point's rows (and the analysis) as JSON")
+    p.add_argument(
+        "--jsonl", metavar="PATH", help="journal: append each finished point's rows as JSON lines (resumable)"
+    )
+    p.add_argument(
+        "--resume", metavar="PATH", help="skip the points already journaled in PATH (same grid) and append the rest"
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    _settings_arguments(p, grid=True)
 
 
 def _settings_arguments(p: argparse.ArgumentParser, *, grid: bool = False) -> None:
@@ -322,11 +355,17 @@ def _parse_sweeps(items: Sequence[str], stiffness: str | None) -> dict[str, list
     return out
 
 
-def _cmd_sweep(args: argparse.Namespace) -> int:
+def _grid(args: argparse.Namespace, kind: str):
+    """Plan and run a sweep grid (`sweep`, and `frontier`, which also times every point), journaled and resumable.
+
+    Returns (points, result, elapsed seconds), or an exit status if interrupted.
+    """
     from rigidbench import journal, outputs, runner, sweep
 
-    outputs.check_all([("--json", args.json), ("--jsonl", args.jsonl or args.resume)])
-    workers = _workers(args.workers, "--workers")
+    outputs.check_all(
+        [("--json", args.json), ("--jsonl", args.jsonl or args.resume), ("--markdown", getattr(args, "markdown", None))]
+    )
+    workers = _workers(args.jobs, "--jobs")
     path = args.resume or args.jsonl
     with journal.lock(path, create=not args.resume) if path else contextlib.nullcontext():
         try:
@@ -339,19 +378,21 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             )
         except ValueError as exc:
             raise UsageError(str(exc)) from None
+        if not points:
+            raise UsageError("the grid is empty: give at least one target, integrator and timestep")
         finished: dict[str, list[dict]] = {}
-        invocation = {"sweep": [sweep.point_key(p) for p in points]}
+        invocation = {kind: [sweep.point_key(p) for p in points]}
         if args.resume:
-            record = journal.read(args.resume, "sweep")
+            record = journal.read(args.resume, kind)
             journal.warn(record)
             if record.invocation != invocation:
-                raise UsageError(f"journal {args.resume} holds a different sweep grid; give the same targets and grid")
+                raise UsageError(f"journal {args.resume} holds a different {kind} grid; give the same targets and grid")
             sweep.verify_journal(args.resume, record)
             journal.truncate_tail(args.resume, record)
             for job, rows in record.by_job().items():
                 finished[job] = [runner.strip(r) for r in rows]
         elif path:
-            journal.start(path, "sweep", invocation)
+            journal.start(path, kind, invocation)
 
         def on_result(point: sweep.Point, rows: list[dict]) -> None:
             if path:
@@ -365,24 +406,81 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
                 progress=None if args.quiet else sweep.progress_line,
                 finished=finished,
                 on_result=on_result,
+                timed=kind == "frontier",
             )
         except runner.Interrupted as exc:
             print(
-                f"rigidbench: sweep interrupted by {exc.name}; finished points are in "
+                f"rigidbench: {kind} interrupted by {exc.name}; finished points are in "
                 f"{path or '(nowhere: use --jsonl)'}",
                 file=sys.stderr,
             )
             return exc.status
+    return points, result, time.perf_counter() - t0
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    import mujoco
+
+    from rigidbench import sweep
+
+    ran = _grid(args, "sweep")
+    if isinstance(ran, int):
+        return ran
+    points, result, elapsed = ran
     out = _human(args.json)
     if args.errors:
         print(sweep.error_table(result), file=out)
         print(file=out)
     print(sweep.order_table(result.orders), file=out)
-    import mujoco
-
-    print(f"\nmujoco {mujoco.__version__}; {len(points)} points in {time.perf_counter() - t0:.1f} s", file=out)
+    print(f"\nmujoco {mujoco.__version__}; {len(points)} points in {elapsed:.1f} s", file=out)
     if args.json:
         sweep.write_json(args.json, result)
+    return EXIT_OK
+
+
+def _cmd_frontier(args: argparse.Namespace) -> int:
+    from rigidbench import frontier, outputs, simulate
+
+    targets = args.target_error or list(frontier.TARGET_ERRORS)
+    for e in targets:
+        if not (e > 0 and e < float("inf")):
+            raise UsageError(f"--target-error = {e!r} must be a positive number")
+    machine = simulate.machine()
+    ran = _grid(args, "frontier")
+    if isinstance(ran, int):
+        return ran
+    points, result, elapsed = ran
+    machine["load_after"] = simulate.machine()["load"]
+    machine["jobs"] = _workers(args.jobs, "--jobs")
+    settings = frontier.settings_of(result.rows)
+    frontier.mark_fronts(settings)
+    references = frontier.references({s.scenario for s in settings})
+    answers = [a for e in targets for a in frontier.cheapest(settings, e, references)]
+    out = _human(args.json, args.markdown)
+    print(frontier.table(settings), file=out)
+    print(file=out)
+    print(frontier.answers_table(answers), file=out)
+    load = machine["load"] or ["?"]
+    print(
+        f"\nmujoco {machine['mujoco']}; {len(points)} points in {elapsed:.1f} s on {machine['cpu']} "
+        f"({machine['cpus']} CPUs, {machine['jobs']} at a time, load {load[0]:.2g})",
+        file=out,
+    )
+    doc = frontier.document(result.rows, settings, answers, machine)
+    if args.json:
+        outputs.write(args.json, _dumps(doc), "--json")
+    if args.markdown:
+        outputs.write(args.markdown, frontier.markdown(doc, answers), "--markdown")
+    if args.figures:
+        import os
+
+        from rigidbench import report
+        from rigidbench.plots.frontier import frontier_figures
+
+        os.makedirs(args.figures, exist_ok=True)
+        for fig in frontier_figures(doc):
+            slug = fig.title.split(": ", 1)[1]
+            outputs.write_bytes(os.path.join(args.figures, f"frontier-{slug}.png"), report.png(fig.figure), "--figures")
     return EXIT_OK
 
 
@@ -847,6 +945,7 @@ def _main(argv: Sequence[str] | None) -> int:
         except ValueError as exc:
             raise UsageError(str(exc)) from None
     commands = {
+        "frontier": _cmd_frontier,
         "compare": _cmd_compare,
         "report": _cmd_report,
         "render": _cmd_render,

@@ -37,7 +37,7 @@ import mujoco
 from rigidbench.results import _jsonable
 
 FORMAT = "rigidbench-journal/2"
-KINDS = ("run", "census", "sweep")
+KINDS = ("run", "census", "sweep", "frontier")
 
 
 class JournalError(ValueError):

@@ -130,7 +130,11 @@ def write(path: str, text: str, option: str = "output") -> None:
     OutputError
         If the write fails; the previous file is left as it was and no temporary file remains.
     """
-    data = text.encode()
+    write_bytes(path, text.encode(), option)
+
+
+def write_bytes(path: str, data: bytes, option: str = "output") -> None:
+    """`write` for bytes (a PNG)."""
     if path == STDOUT:
         try:
             sys.stdout.flush()

@@ -56,6 +56,10 @@ def load(paths: Sequence[str]) -> tuple[list[dict[str, Any]], list[dict[str, Any
             _check_list(path, doc.get("limits"), "limits", {"scenario": str, "quantity": str, "caught_by": list})
             audits.append(doc)
             continue
+        if doc.get("kind") == "frontier":
+            _check_list(path, doc.get("settings"), "settings", {"scenario": str, "integrator": str})
+            audits.append(doc)
+            continue
         if doc.get("kind") == "census":
             _check_list(path, doc.get("draws"), "draws", {"scenario": str, "case": str, "status": str})
             if not isinstance(doc.get("scenarios"), dict):
@@ -258,7 +262,8 @@ def _page(rows, runs, sweeps, versions, figures, audits=()) -> str:
         if doc.get("fit_rule"):
             out.append(f"<details><summary>Fit rule</summary><pre>{html.escape(doc['fit_rule'])}</pre></details>")
     for doc in audits:
-        out += _power_section(doc) if doc["kind"] == "power" else _census_section(doc)
+        sections = {"power": _power_section, "census": _census_section, "frontier": _frontier_section}
+        out += sections[doc["kind"]](doc)
     out += [
         '<footer id=selfcheck data-images-ok="" data-errors="">checking images...</footer>',
         f"<script>{_JS}</script>",
@@ -300,6 +305,43 @@ def _power_section(doc: Mapping[str, Any]) -> list[str]:
         f"<p>{intro}</p>",
         _table(("scenario", "quantity", "detected at", "caught by", "theory moves at"), lines),
     ]
+
+
+def _frontier_section(doc: Mapping[str, Any]) -> list[str]:
+    """Speed against accuracy: one figure per scenario and the cheapest settings per target error."""
+    from rigidbench.plots.frontier import frontier_figures
+
+    m = doc.get("machine", {})
+    out = [
+        f"<h2>Speed against accuracy (mujoco {html.escape(doc['mujoco'])}; {html.escape(str(m.get('cpu')))}, "
+        f"{m.get('cpus')} CPUs)</h2>"
+    ]
+    for fig in frontier_figures(doc):
+        slug = fig.title.split(": ", 1)[1]
+        out.append(
+            f'<figure data-scenario="{html.escape(slug)}">{_img(png(fig.figure), fig.title)}<figcaption><b>'
+            f"{html.escape(fig.title)}.</b> {html.escape(fig.caption)}</figcaption></figure>"
+        )
+    lines = []
+    for a in doc.get("answers", []):
+        pick = a.get("cheapest")
+        where = f"{pick['integrator']} x{pick['scale']:g}" if pick else f"none (best {a['best_error']:.2e})"
+        cost = f"{pick['cpu_per_sim_second']:.3g}" if pick else "-"
+        speed = a.get("times_cheaper_than_reference")
+        lines.append(
+            (
+                a["scenario"],
+                a.get("check") or "all",
+                f"{a['target_error']:g}",
+                where,
+                cost,
+                f"{speed:.3g}" if speed else "-",
+            )
+        )
+    if lines:
+        header = ("scenario", "check", "target error", "cheapest setting", "CPU s/sim s", "x cheaper than reference")
+        out += ["<p>The cheapest setting whose error is at most the target:</p>", _table(header, lines)]
+    return out
 
 
 def _census_section(doc: Mapping[str, Any]) -> list[str]:

@@ -34,6 +34,8 @@ def rows_of(run: CaseRun) -> list[dict[str, Any]]:
         "nstep": run.nstep,
         "wall_time": run.wall_time,
     }
+    if run.timing is not None:
+        common["cost"] = run.timing.record(float(run.settings["timestep"]))
     if run.diverged_at is not None:
         return [
             {

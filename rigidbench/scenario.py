@@ -25,7 +25,7 @@ import numpy as np
 
 from rigidbench.params import Bound, Param, Range, Value, check_known
 from rigidbench.settings import DERIVED_TEXT, Settings, read_settings, skip_idle_stages
-from rigidbench.simulate import Trajectory, check_run_size, simulate, steps_for
+from rigidbench.simulate import Timing, Trajectory, check_run_size, simulate, steps_for, time_calls, time_stepping
 
 Params = dict[str, Value]
 _BUILD_LOCK = threading.RLock()
@@ -198,6 +198,7 @@ class CaseRun:
     wall_time: float
     trajectory: Trajectory | None = field(default=None, repr=False)
     prediction: Mapping[str, Any] | None = field(default=None, repr=False)
+    timing: Timing | None = None
 
 
 @dataclass
@@ -501,11 +502,15 @@ class Scenario:
         *,
         keep_trajectory: bool = False,
         perturb: Callable[[mujoco.MjModel], None] | None = None,
+        timed: bool = False,
     ) -> CaseRun:
         """Simulate one case and score every check it names.
 
         Parameters
         ----------
+        timed : bool
+            Also measure what the stepping costs (`rigidbench.simulate.time_stepping`: only the stepping, never
+            the prediction or the measurement; a scenario with its own `simulate` is timed by whole calls).
         perturb : callable, optional
             Edits a copy of the compiled model in place before it is simulated (`rigidbench.power`): the
             prediction, the controls and the measurement keep the unperturbed model, so a check that fails shows
@@ -525,9 +530,18 @@ class Scenario:
         if perturb is not None:
             simulated = copy.copy(model)
             perturb(simulated)
-        t0 = _time.perf_counter()
+        c0, t0 = _time.process_time(), _time.perf_counter()
         traj = self.simulate(simulated, data, prep.duration, control=control)
         wall = _time.perf_counter() - t0
+        cpu = _time.process_time() - c0
+        timing = None
+        if timed and traj.diverged_at is None:
+            if type(self).simulate is Scenario.simulate:
+                timing = time_stepping(simulated, traj, control, first=(cpu, wall))
+            else:
+                timing = time_calls(
+                    lambda: self.simulate(simulated, data, prep.duration, control=control), steps=prep.nstep
+                )
         outcomes = []
         if traj.diverged_at is None:
             measured = self.measure(model, traj, prediction)
@@ -547,6 +561,7 @@ class Scenario:
             wall_time=wall,
             trajectory=traj if keep_trajectory else None,
             prediction=prediction if keep_trajectory else None,
+            timing=timing,
         )
 
 

@@ -8,7 +8,10 @@ the state is no longer finite or time stops increasing.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import os
+import statistics
+import time as _time
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -37,12 +40,16 @@ class Trajectory:
     diverged_at : float or None
         Simulated time (s) of the last good sample before the state stopped being finite or MuJoCo reset it;
         None if the run stayed sane.
+    states : ndarray, shape (n + 1, nstate), optional
+        The full-physics states (`STATE`) the other fields are views of: what restarts the run exactly from any
+        sample (`time_stepping`).
     """
 
     time: np.ndarray
     qpos: np.ndarray
     qvel: np.ndarray
     diverged_at: float | None
+    states: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def timestep(self) -> float:
@@ -128,7 +135,7 @@ def split_states(model: mujoco.MjModel, states: np.ndarray) -> Trajectory:
     time = states[:, 0]
     qpos = states[:, 1 : 1 + model.nq]
     qvel = states[:, 1 + model.nq : 1 + model.nq + model.nv]
-    return Trajectory(time=time, qpos=qpos, qvel=qvel, diverged_at=divergence_time(time, qpos, qvel))
+    return Trajectory(time=time, qpos=qpos, qvel=qvel, diverged_at=divergence_time(time, qpos, qvel), states=states)
 
 
 def divergence_time(time: np.ndarray, qpos: np.ndarray, qvel: np.ndarray) -> float | None:
@@ -200,8 +207,6 @@ def final_states(
     ValueError
         If nstep < 1 or nstep > MAX_STEPS, or the shapes do not match.
     """
-    import os
-
     if not 1 <= nstep <= MAX_STEPS:
         raise ValueError(f"nstep = {nstep} is outside [1, {MAX_STEPS}]")
     states0 = np.atleast_2d(np.asarray(states0, dtype=float))
@@ -225,3 +230,162 @@ def final_states(
     diverged = ~(np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1))
     diverged |= ~np.isclose(out[:, 0], t_end, rtol=1e-9, atol=0.5 * base.opt.timestep)
     return out, diverged
+
+
+# ---- the cost of stepping ------------------------------------------------------------------------------------
+
+# What a cost measurement times (`time_stepping`): at least TIMING_BUDGET seconds, at least TIMING_REPEATS repeats.
+TIMING_BUDGET = 0.1
+TIMING_REPEATS = 3
+
+
+@dataclass(frozen=True)
+class Timing:
+    """The measured cost of stepping a case.
+
+    Attributes
+    ----------
+    cpu_per_step, wall_per_step : float
+        Median over the repeats of CPU seconds (this process, every thread) and wall seconds per step.
+    cpu_spread : tuple of float
+        The smallest and largest CPU seconds per step over the repeats.
+    repeats : int
+    steps : int
+        Steps timed in all.
+    method : str
+        ``"chunks"``: stretches of the run restarted from its recorded states, spread over the run (so that a
+        run whose cost changes along it, e.g. in contact, is sampled where it costs); ``"whole"``: the whole
+        run repeated (a run shorter than a chunk, or a scenario with its own `simulate`).
+    """
+
+    cpu_per_step: float
+    wall_per_step: float
+    cpu_spread: tuple[float, float]
+    repeats: int
+    steps: int
+    method: str
+
+    def record(self, timestep: float) -> dict:
+        """The cost as rows carry it: CPU seconds per simulated second, its spread, the real-time factor."""
+        return {
+            "cpu_per_sim_second": self.cpu_per_step / timestep,
+            "cpu_per_sim_second_spread": [self.cpu_spread[0] / timestep, self.cpu_spread[1] / timestep],
+            "realtime_factor": timestep / self.cpu_per_step if self.cpu_per_step > 0 else None,
+            "wall_per_sim_second": self.wall_per_step / timestep,
+            "timed_repeats": self.repeats,
+            "timed_steps": self.steps,
+            "timing": self.method,
+        }
+
+
+def time_stepping(
+    model: mujoco.MjModel,
+    traj: Trajectory,
+    control: np.ndarray | None = None,
+    *,
+    first: tuple[float, float] | None = None,
+    budget: float = TIMING_BUDGET,
+    repeats: int = TIMING_REPEATS,
+) -> Timing:
+    """Time the stepping of a run already simulated, from its recorded states, without re-running all of it.
+
+    `first` is the (CPU, wall) seconds the run itself took: it is the first repeat (the whole run's stepping).
+    Each further repeat restarts `mujoco.rollout` from a recorded state and steps a chunk of the run (the same
+    controls), timing only the rollout. Chunks are long enough that `repeats` of them take `budget` seconds (from
+    the first repeat's cost per step), and start at evenly spaced points of the run; a run shorter than a chunk is
+    repeated whole. Repeats continue until `budget` seconds have been timed and at least `repeats` were made.
+
+    Raises
+    ------
+    ValueError
+        If the trajectory has no recorded states.
+    """
+    if traj.states is None:
+        raise ValueError("the trajectory has no recorded states to restart from")
+    states = traj.states
+    nstep = len(states) - 1
+    data = mujoco.MjData(model)
+    probe = min(nstep, 64)
+
+    def step_from(start: int, n: int) -> tuple[float, float]:
+        kwargs = {}
+        if control is not None:
+            kwargs["control"] = np.asarray(control[start : start + n])[None]
+        out = np.empty((1, n, states.shape[1]))
+        c0, w0 = _time.process_time(), _time.perf_counter()
+        rollout.rollout(model, data, states[start][None], nstep=n, state=out, **kwargs)
+        return _time.process_time() - c0, _time.perf_counter() - w0
+
+    cpus: list[float] = []
+    walls: list[float] = []
+    timed = 0.0
+    if first is not None:
+        cpus.append(first[0] / nstep)
+        walls.append(first[1] / nstep)
+        timed = first[1]
+        per_step = max(first[1] / nstep, 1e-9)
+    else:
+        per_step = max(step_from(0, probe)[1] / probe, 1e-9)
+    left = max(budget - timed, 0.0) / max(repeats - len(cpus), 1)
+    chunk = int(min(nstep, max(probe, left / per_step)))
+    starts = [0] if chunk >= nstep else [round(i * (nstep - chunk) / max(repeats - 1, 1)) for i in range(repeats)]
+    i = 0
+    while len(cpus) < repeats or timed < budget:
+        start = starts[i % len(starts)]
+        cpu, wall = step_from(start, chunk)
+        cpus.append(cpu / chunk)
+        walls.append(wall / chunk)
+        timed += wall
+        i += 1
+        if i >= 1000:  # a run of a few steps: enough repeats
+            break
+    return Timing(
+        cpu_per_step=statistics.median(cpus),
+        wall_per_step=statistics.median(walls),
+        cpu_spread=(min(cpus), max(cpus)),
+        repeats=len(cpus),
+        steps=chunk * (len(cpus) - (first is not None)) + (nstep if first is not None else 0),
+        method="whole" if chunk >= nstep else "chunks",
+    )
+
+
+def time_calls(run, *, steps: int, budget: float = TIMING_BUDGET, repeats: int = TIMING_REPEATS) -> Timing:
+    """Time a whole simulation call `run()` (a scenario's own `simulate`) repeatedly: `steps` is what one call
+    steps. Repeats until `budget` seconds and `repeats` calls."""
+    cpus: list[float] = []
+    walls: list[float] = []
+    timed = 0.0
+    while len(cpus) < repeats or timed < budget:
+        c0, w0 = _time.process_time(), _time.perf_counter()
+        run()
+        cpu, wall = _time.process_time() - c0, _time.perf_counter() - w0
+        cpus.append(cpu / steps)
+        walls.append(wall / steps)
+        timed += wall
+    return Timing(
+        statistics.median(cpus), statistics.median(walls), (min(cpus), max(cpus)), len(cpus), steps * len(cpus), "whole"
+    )
+
+
+def machine() -> dict:
+    """What a cost figure depends on: the CPU, the CPUs this process may use, the load, the versions."""
+    import platform
+
+    model = platform.processor() or ""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    model = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    load = os.getloadavg() if hasattr(os, "getloadavg") else None
+    return {
+        "cpu": model,
+        "cpus": cpus,
+        "load": list(load) if load else None,
+        "python": platform.python_version(),
+        "mujoco": mujoco.__version__,
+    }

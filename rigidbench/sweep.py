@@ -72,6 +72,12 @@ class Point:
     timestep: float
     param: tuple[tuple[str, float], ...] = ()
     base: Settings = Settings()  # the user's settings the grid varies on (profile, --option, --settings-from)
+    reference_timestep: float | None = None  # the case's reference timestep (s): the grid's dt is a multiple of it
+
+    @property
+    def scale(self) -> float | None:
+        """dt / dt_ref: where the point sits on the case's ladder (1 = the reference timestep)."""
+        return None if not self.reference_timestep else self.timestep / self.reference_timestep
 
     def settings(self) -> Settings:
         return self.base.merged(Settings(integrator=self.integrator, timestep=self.timestep))
@@ -86,6 +92,8 @@ class Point:
         }
         if self.base != Settings():
             out["base"] = self.base.record()
+        if self.reference_timestep:
+            out["reference_timestep"] = self.reference_timestep
         return out
 
 
@@ -376,17 +384,19 @@ def plan(
         for case in cases:
             for combo in combos:
                 try:
-                    steps = list(timesteps) if timesteps else ladder(*reference(scenario.slug, case, dict(combo)))
+                    dt_ref, duration = reference(scenario.slug, case, dict(combo))
                 except ValueError as exc:
                     raise ValueError(f"{scenario.slug}:{case}: {exc}") from None
+                steps = list(timesteps) if timesteps else ladder(dt_ref, duration)
                 for integrator in integrators:
                     for dt in steps:
-                        points.append(Point(scenario.slug, case, integrator, float(dt), combo, base))
+                        points.append(Point(scenario.slug, case, integrator, float(dt), combo, base, dt_ref))
     return points
 
 
-def run_point(point: Point) -> list[dict[str, Any]]:
-    """Simulate one grid point; its result rows, each with the ``point`` record.
+def run_point(point: Point, timed: bool = False) -> list[dict[str, Any]]:
+    """Simulate one grid point; its result rows, each with the ``point`` record (and, if `timed`, the ``cost`` of
+    its stepping, `Scenario.run`).
 
     A point the model refuses (`Scenario.check_model`, e.g. a contact too stiff for the timestep) yields one
     row with status ``"refused"`` and the reason, instead of raising: it is a finding of the sweep.
@@ -398,7 +408,7 @@ def run_point(point: Point) -> list[dict[str, Any]]:
     previous = mujoco.get_mju_user_warning()
     mujoco.set_mju_user_warning(warnings.append)
     try:
-        run = scenario.run(point.case, dict(point.param), point.settings())
+        run = scenario.run(point.case, dict(point.param), point.settings(), timed=timed)
     except ValueError as exc:
         rows = [
             {
@@ -468,8 +478,10 @@ def execute(
     progress: Callable[[int, int, Point], None] | None = None,
     finished: Mapping[str, list[dict[str, Any]]] | None = None,
     on_result: Callable[[Point, list[dict[str, Any]]], None] | None = None,
+    timed: bool = False,
 ) -> Sweep:
-    """Run every point (in `workers` processes; in this process if `workers` <= 1) and fit the orders.
+    """Run every point (in `workers` processes; in this process if `workers` <= 1) and fit the orders; with
+    `timed`, measure each point's cost too (`rigidbench.frontier`).
 
     The rows come back in grid order, whatever order the points finish in. Points whose rows are in
     `finished` (keyed by `point_key`, e.g. from a journal being resumed) are not run again; `on_result` is
@@ -488,13 +500,13 @@ def execute(
 
     if workers <= 1:
         for done, i in enumerate(todo, start=1):
-            record(i, run_point(points[i]), done)
+            record(i, run_point(points[i], timed), done)
     else:
         ctx = multiprocessing.get_context("spawn")  # no fork of a process that may hold GL or threads
         with concurrent.futures.ProcessPoolExecutor(
             max_workers=workers, mp_context=ctx, initializer=start_worker, initargs=(os.getpid(),)
         ) as pool:
-            futures = {pool.submit(run_point, points[i]): i for i in todo}
+            futures = {pool.submit(run_point, points[i], timed): i for i in todo}
             try:
                 for done, future in enumerate(concurrent.futures.as_completed(futures), start=1):
                     record(futures[future], future.result(), done)

@@ -11,8 +11,8 @@ import numpy as np
 
 from rigidbench.plots import Figure, pyplot
 
-COLORS = {"Euler": "C0", "implicit": "C1", "implicitfast": "C2", "RK4": "C3"}
-MARKERS = {"Euler": "o", "implicit": "s", "implicitfast": "x", "RK4": "D"}
+COLORS = {"Euler": "C0", "implicit": "C1", "implicitfast": "C2", "RK4": "C3", "discrete": "C5"}
+MARKERS = {"Euler": "o", "implicit": "s", "implicitfast": "x", "RK4": "D", "discrete": "^"}
 
 
 def convergence_figures(doc: Mapping[str, Any]) -> list[Figure]:
