@@ -51,7 +51,7 @@ def load(paths: Sequence[str]) -> tuple[list[dict[str, Any]], list[dict[str, Any
         except (OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise ValueError(f"--from {path}: {exc}") from None
         if not isinstance(doc, dict) or "mujoco" not in doc:
-            raise ValueError(f"--from {path}: not a rigidbench document (no 'mujoco')")
+            raise ValueError(f"--from {path}: not a rigidbench results document (no 'mujoco')")
         if doc.get("kind") == "power":
             _check_list(path, doc.get("limits"), "limits", {"scenario": str, "quantity": str, "caught_by": list})
             audits.append(doc)

@@ -8,7 +8,7 @@ import mujoco
 import pytest
 
 from rigidbench import cli, frontier, registry, sweep
-from rigidbench.simulate import simulate, time_stepping
+from rigidbench.simulate import TIMING_BUDGET, simulate, time_stepping
 
 
 def test_pareto_keeps_what_nothing_beats_in_both_and_never_a_diverged_point():
@@ -43,17 +43,18 @@ def test_cost_timing_of_a_known_stepping_loop_matches_stepping_it_directly():
     prep = scenario.prepare("one-radian")
     traj = simulate(prep.model, prep.data, prep.duration)
     timing = time_stepping(prep.model, traj)
-    assert timing.repeats >= 3 and timing.steps * timing.wall_per_step >= 0.1
+    assert timing.repeats >= 3 and timing.steps * timing.wall_per_step >= 0.5 * TIMING_BUDGET
     data = mujoco.MjData(prep.model)
     n = 20_000
     best = math.inf
     for _ in range(3):
         mujoco.mj_resetData(prep.model, data)
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         mujoco.mj_step(prep.model, data, n)
-        best = min(best, (time.perf_counter() - t0) / n)
-    # rollout steps in C like mj_step's own loop: the two per-step costs agree within a machine's noise
-    assert 0.5 < timing.wall_per_step / best < 2.0
+        best = min(best, (time.process_time() - t0) / n)
+    # rollout steps in C like mj_step's own loop: their CPU seconds per step agree within a loaded machine's noise
+    # (the fastest repeat of each, CPU time: what other processes do to the wall clock does not enter)
+    assert 0.5 < timing.cpu_spread[0] / best < 2.0
 
 
 def test_frontier_errors_are_the_errors_run_reports_for_the_same_settings(tmp_path):
