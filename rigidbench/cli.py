@@ -202,7 +202,13 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _jobs_argument(p: argparse.ArgumentParser, what: str) -> None:
-    """One name for "how many at once" on every command (``--workers`` is kept as an alias)."""
+    """One name for "how many at once" on every command (``--workers`` is kept as an alias), and where."""
+    p.add_argument(
+        "--cluster",
+        metavar="ADDRESS",
+        help="run the jobs on a Dask cluster: a scheduler's address (tcp://host:8786) or local:N (N worker processes "
+        "here); needs the 'cluster' extra. Without it nothing of Dask is imported",
+    )
     p.add_argument(
         "--jobs",
         "--workers",
@@ -399,6 +405,7 @@ def _grid(args: argparse.Namespace, kind: str):
                 journal.append(path, sweep.point_key(point), rows)
 
         t0 = time.perf_counter()
+        executor = runner.executor_for(args.cluster, workers, processes=True)
         try:
             result = sweep.execute(
                 points,
@@ -407,6 +414,7 @@ def _grid(args: argparse.Namespace, kind: str):
                 finished=finished,
                 on_result=on_result,
                 timed=kind == "frontier",
+                executor=executor,
             )
         except runner.Interrupted as exc:
             print(
@@ -415,6 +423,8 @@ def _grid(args: argparse.Namespace, kind: str):
                 file=sys.stderr,
             )
             return exc.status
+        finally:
+            executor.close()
     return points, result, time.perf_counter() - t0
 
 
@@ -537,12 +547,15 @@ def _cmd_report(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     say = None if args.quiet else report.progress_line
     if jobs:
-        rows: list[dict] = []
-        for i, batch in enumerate(runner.execute(jobs, runner.settings_for("reference"))):
+
+        def progress(i: int, n: int, job) -> None:
             if say:
-                say(f"[{i + 1}/{len(jobs)}] {jobs[i].name}")
-            rows.extend(batch)
-        runs = [results.document(rows)]
+                say(f"[{i + 1}/{n}] {job.name}")
+
+        result = runner.run_jobs(jobs, runner.settings_for("reference"), progress=progress)
+        if result.interrupted is not None:
+            raise result.interrupted
+        runs = [results.document(result.ordered())]
     text = report.build(runs, sweeps, audits, progress=say, figure_dir=args.figures, clips=args.clips)
     report.write(args.out, text)
     print(f"{args.out}: {len(text) / 1e6:.2f} MB, {text.count('<img ')} figures")
@@ -718,15 +731,19 @@ def _session(
                 print(f"resuming: {done} of {len(jobs)} cases already done", file=sys.stderr)
         elif path:
             journal.start(path, kind, _invocation(args, schema))
-        with _mujoco_warnings():
-            result = runner.run_jobs(
-                jobs,
-                settings,
-                journal_path=path,
-                previous=previous,
-                progress=None if args.quiet else _progress,
-                workers=_workers(args.jobs, "--jobs"),
-            )
+        executor = runner.executor_for(args.cluster, _workers(args.jobs, "--jobs"))
+        try:
+            with _mujoco_warnings():
+                result = runner.run_jobs(
+                    jobs,
+                    settings,
+                    journal_path=path,
+                    previous=previous,
+                    progress=None if args.quiet else _progress,
+                    executor=executor,
+                )
+        finally:
+            executor.close()
     return settings, jobs, result, path
 
 
@@ -834,37 +851,20 @@ def _cmd_power(args: argparse.Namespace) -> int:
         pairs = power.plan(args.targets, settings)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    limits = {(sc.slug, q.name): power.Limit(sc.slug, q.name) for sc, q in pairs}
     t0 = time.perf_counter()
-    alive = list(pairs)
-    interrupted = None
-    workers = _workers(args.jobs, "--jobs")
-    for delta in power.DELTAS:
-        if not alive:
-            break
+    executor = runner.executor_for(args.cluster, _workers(args.jobs, "--jobs"))
+
+    def say(delta: float, alive: int) -> None:
         if not args.quiet:
-            print(f"delta = {delta:.0e}: {len(alive)} quantities", file=sys.stderr, flush=True)
-        jobs = power.jobs_at(alive, delta)
+            print(f"delta = {delta:.0e}: {alive} quantities", file=sys.stderr, flush=True)
+
+    try:
         with _mujoco_warnings():
-            result = runner.run_jobs(jobs, settings, workers=workers)
-        caught: dict[tuple[str, str], list[str]] = {}
-        for job in jobs:
-            quantity = job.variant.split("*")[0]
-            caught.setdefault((job.scenario.slug, quantity), []).extend(power.failing(result.rows.get(job.key, [])))
-        for sc, q in alive:
-            limits[(sc.slug, q.name)].tried.append(delta)
-        alive = [(sc, q) for sc, q in alive if caught.get((sc.slug, q.name))]
-        for sc, q in alive:
-            lim = limits[(sc.slug, q.name)]
-            lim.detected, lim.caught_by = delta, caught[(sc.slug, q.name)]
-        if result.interrupted is not None:
-            interrupted = result.interrupted
-            break
-    if interrupted is None:
-        for sc, q in pairs:
-            limits[(sc.slug, q.name)].theory = power.theory_sensitivity(sc, q, settings)
+            limits, interrupted = power.walk(pairs, settings, executor, progress=say)
+    finally:
+        executor.close()
     out = _human(args.json)
-    print(power.table(list(limits.values())), file=out)
+    print(power.table(limits), file=out)
     print(
         f"\nmujoco {mujoco.__version__}, profile {args.profile}; deltas {power.DELTAS[0]:.0e} .. "
         f"{power.DELTAS[-1]:.0e}; {time.perf_counter() - t0:.1f} s",
@@ -876,7 +876,7 @@ def _cmd_power(args: argparse.Namespace) -> int:
             "mujoco": mujoco.__version__,
             "profile": args.profile,
             "complete": interrupted is None,
-            "limits": [lim.record() for lim in limits.values()],
+            "limits": [lim.record() for lim in limits],
         }
         outputs.write(args.json, _dumps(doc), "--json")
     if interrupted is not None:
@@ -932,8 +932,9 @@ def _is_one_line(exc: BaseException) -> bool:
     """An error a user's input or machine causes (an output, a journal), reported in one line with status 2."""
     from rigidbench.journal import JournalError
     from rigidbench.outputs import OutputError
+    from rigidbench.runner import ClusterError
 
-    return isinstance(exc, (OutputError, JournalError))
+    return isinstance(exc, (OutputError, JournalError, ClusterError))
 
 
 def _main(argv: Sequence[str] | None) -> int:

@@ -55,11 +55,24 @@ class Quantity:
     name: str
     scale: Callable[[mujoco.MjModel, float], None]
 
-    def perturb(self, delta: float) -> Callable[[mujoco.MjModel], None]:
-        def apply(model: mujoco.MjModel) -> None:
-            self.scale(model, delta)
+    def perturb(self, delta: float) -> Perturbation:
+        return Perturbation(self.name, delta)
 
-        return apply
+
+@dataclass(frozen=True)
+class Perturbation:
+    """Scale the quantity `name` of a model by ``1 + delta``: a value (picklable, so a job carrying it can run on a
+    cluster), found again in the model it is applied to (`quantities`)."""
+
+    name: str
+    delta: float
+
+    def __call__(self, model: mujoco.MjModel) -> None:
+        for q in quantities(model):
+            if q.name == self.name:
+                q.scale(model, self.delta)
+                return
+        raise ValueError(f"the model has no quantity {self.name!r} to perturb")
 
 
 def _moving_bodies(model: mujoco.MjModel) -> list[int]:
@@ -222,3 +235,43 @@ def table(limits: Sequence[Limit]) -> str:
     out = [fmt.format(*header), fmt.format(*("-" * w for w in widths))]
     out += [fmt.format(*line).rstrip() for line in lines]
     return "\n".join(out)
+
+
+def walk(
+    pairs: Sequence[tuple[Scenario, Quantity]],
+    settings: Settings | None,
+    executor: Any,
+    *,
+    progress: Callable[[float, int], None] | None = None,
+) -> tuple[list[Limit], Any]:
+    """Walk the deltas down (module docstring): at each delta run every case of every quantity still caught, on
+    `executor` (`rigidbench.runner.run_jobs`), until nothing is caught; then the theory's own sensitivity.
+
+    Returns the limits, and the interrupt that stopped the walk (None if it finished).
+    """
+    from rigidbench.runner import run_jobs
+
+    limits = {(sc.slug, q.name): Limit(sc.slug, q.name) for sc, q in pairs}
+    alive = list(pairs)
+    for delta in DELTAS:
+        if not alive:
+            break
+        if progress is not None:
+            progress(delta, len(alive))
+        jobs = jobs_at(alive, delta)
+        result = run_jobs(jobs, settings, executor=executor)
+        caught: dict[tuple[str, str], list[str]] = {}
+        for job in jobs:
+            quantity = job.variant.split("*")[0]
+            caught.setdefault((job.scenario.slug, quantity), []).extend(failing(result.rows.get(job.key, [])))
+        for sc, q in alive:
+            limits[(sc.slug, q.name)].tried.append(delta)
+        alive = [(sc, q) for sc, q in alive if caught.get((sc.slug, q.name))]
+        for sc, q in alive:
+            lim = limits[(sc.slug, q.name)]
+            lim.detected, lim.caught_by = delta, caught[(sc.slug, q.name)]
+        if result.interrupted is not None:
+            return list(limits.values()), result.interrupted
+    for sc, q in pairs:
+        limits[(sc.slug, q.name)].theory = theory_sensitivity(sc, q, settings)
+    return list(limits.values()), None

@@ -15,7 +15,7 @@ import os
 import signal
 import traceback
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -200,35 +200,236 @@ def error_row(job: Job, settings: Settings | None, exc: BaseException) -> dict[s
     }
 
 
+# ---- where jobs run ------------------------------------------------------------------------------------------
+
+
+class ClusterError(Exception):
+    """A Dask cluster that cannot be reached or went away; one line, exit status 2 (the journal keeps every row
+    that came back, and ``--resume`` continues)."""
+
+
+class Threads:
+    """Jobs on this process's threads: a case's time goes to `mujoco.rollout`, which steps in C without the GIL, so
+    two cores run two cases. The default executor."""
+
+    def __init__(self, workers: int) -> None:
+        self.workers = max(1, int(workers))
+
+    def map(self, fn: Callable, calls: Sequence[tuple]) -> Iterator[tuple[int, Any]]:
+        """Yield ``(index, fn(*calls[index]))`` as each call finishes (in order with one worker)."""
+        if self.workers <= 1 or len(calls) <= 1:
+            for i, args in enumerate(calls):
+                yield i, fn(*args)
+            return
+        pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="rigidbench-case")
+        try:
+            futures = {pool.submit(fn, *args): i for i, args in enumerate(calls)}
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+        finally:
+            pool.shutdown(wait=False, cancel_futures=True)  # an interrupt: drop what has not started
+
+    def close(self) -> None:
+        pass
+
+
+class Processes:
+    """Jobs in worker processes here (spawned, never forked from a process that may hold GL or threads; each dies
+    with this one, `start_worker`): what a sweep or a frontier uses, so that each point is timed in its own
+    process."""
+
+    def __init__(self, workers: int) -> None:
+        self.workers = max(1, int(workers))
+
+    def map(self, fn: Callable, calls: Sequence[tuple]) -> Iterator[tuple[int, Any]]:
+        """Yield ``(index, fn(*calls[index]))`` as each call finishes (in this process with one worker)."""
+        if self.workers <= 1:
+            for i, args in enumerate(calls):
+                yield i, fn(*args)
+            return
+        import concurrent.futures
+        import multiprocessing
+
+        ctx = multiprocessing.get_context("spawn")
+        pool = concurrent.futures.ProcessPoolExecutor(
+            max_workers=self.workers, mp_context=ctx, initializer=start_worker, initargs=(os.getpid(),)
+        )
+        try:
+            futures = {pool.submit(fn, *args): i for i, args in enumerate(calls)}
+            for future in concurrent.futures.as_completed(futures):
+                yield futures[future], future.result()
+        except BaseException:  # Ctrl-C or a worker's error: drop what has not started, stop what runs
+            running = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for process in running:
+                process.terminate()
+            raise
+        pool.shutdown()
+
+    def close(self) -> None:
+        pass
+
+
+def start_worker(parent: int) -> None:
+    """Set up a worker process: Ctrl-C is the parent's to handle (a terminal sends SIGINT to the whole process
+    group; the parent stops the workers), and the worker ends when the process that started it does, even by
+    SIGKILL, which runs no cleanup: on Linux the kernel sends it SIGKILL (``prctl(PR_SET_PDEATHSIG)``); elsewhere,
+    and in case the parent died before that was set, a daemon thread polls the parent's pid. Without it a killed
+    sweep leaves its workers (~120 MB each) and multiprocessing's resource tracker running for ever."""
+    import ctypes
+    import threading
+    import time
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):
+        pass
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    if os.getppid() != parent:
+        os._exit(1)
+    threading.Thread(target=watch, name="rigidbench-watch-parent", daemon=True).start()
+
+
+class Cluster:
+    """Jobs on a Dask cluster: ``local:N`` starts N single-threaded worker processes here; anything else is the
+    address of a running scheduler (``tcp://host:8786``, e.g. from ``dask scheduler`` or dask-jobqueue on SLURM).
+
+    Each call is submitted under a key that hashes what it computes (the job, its settings, the rigidbench and
+    MuJoCo versions), so a retry or a resubmission never computes a job twice, and a worker that dies has its calls
+    recomputed elsewhere by the scheduler. A scheduler that cannot be reached within `CONNECT_TIMEOUT` seconds, or
+    that goes away mid-run, is a `ClusterError` (never a hang).
+    """
+
+    CONNECT_TIMEOUT = 10.0
+    POLL = 2.0
+
+    def __init__(self, address: str) -> None:
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise ClusterError("--cluster needs Dask distributed: pip install 'rigidbench[cluster]'") from None
+        import logging
+
+        # Dask logs its reconnect attempts with tracebacks; what went wrong reaches the user as one line here.
+        for name in ["distributed", "tornado", *logging.root.manager.loggerDict]:
+            if name.split(".")[0] in ("distributed", "tornado"):
+                logging.getLogger(name).setLevel(logging.CRITICAL)
+        self.address = address
+        self._cluster = None
+        try:
+            if address.startswith("local:"):
+                n = address.split(":", 1)[1]
+                if not n.isdigit() or int(n) < 1:
+                    raise ClusterError(f"--cluster {address}: give local:N with N >= 1 workers")
+                self._cluster = LocalCluster(
+                    n_workers=int(n), threads_per_worker=1, processes=True, dashboard_address=None
+                )
+                self.client = Client(self._cluster, timeout=self.CONNECT_TIMEOUT)
+            else:
+                self.client = Client(address, timeout=self.CONNECT_TIMEOUT)
+        except ClusterError:
+            raise
+        except (OSError, TimeoutError, ValueError) as exc:
+            self.close()
+            raise ClusterError(
+                f"--cluster {address}: cannot reach a Dask scheduler ({' '.join(str(exc).split())})"
+            ) from None
+        self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
+
+    def map(self, fn: Callable, calls: Sequence[tuple]) -> Iterator[tuple[int, Any]]:
+        """Yield ``(index, fn(*calls[index]))`` as each call finishes on the cluster."""
+        from distributed import wait
+
+        keys = [f"rigidbench-{fn.__name__}-{_digest(args)}" for args in calls]
+        futures = [self.client.submit(fn, *args, key=key, pure=False) for args, key in zip(calls, keys, strict=True)]
+        index = {f.key: i for i, f in enumerate(futures)}
+        pending = set(futures)
+        try:
+            while pending:
+                try:
+                    done, pending = wait(pending, timeout=self.POLL, return_when="FIRST_COMPLETED")
+                except TimeoutError:
+                    done = set()
+                except Exception as exc:  # noqa: BLE001 - the scheduler went away (cancelled futures, closed comm)
+                    raise self._lost(len(calls) - len(pending), len(calls), exc) from None
+                if not done and self.client.status != "running":
+                    raise self._lost(len(calls) - len(pending), len(calls), None)
+                for future in done:
+                    if future.status == "error":
+                        yield index[future.key], future.exception()
+                    elif future.status == "cancelled":
+                        raise self._lost(len(calls) - len(pending), len(calls), None)
+                    else:
+                        yield index[future.key], future.result()
+        finally:
+            if pending and self.client.status == "running":
+                self.client.cancel(list(pending))
+
+    def _lost(self, done: int, total: int, exc: BaseException | None) -> ClusterError:
+        why = f" ({type(exc).__name__})" if exc is not None else ""
+        return ClusterError(f"--cluster {self.address}: lost the Dask scheduler after {done} of {total} jobs{why}")
+
+    def close(self) -> None:
+        client = getattr(self, "client", None)
+        if client is not None:
+            client.close(timeout=5)
+        if self._cluster is not None:
+            self._cluster.close(timeout=10)
+
+
+def _digest(args: tuple) -> str:
+    """A hash of what a call computes: its arguments' identity and the versions that compute them."""
+    import hashlib
+
+    from rigidbench import __version__
+
+    parts = []
+    for a in args:
+        if isinstance(a, Job):
+            parts.append(a.key)
+        elif isinstance(a, Settings):
+            parts.append(json.dumps(a.record(), sort_keys=True, default=str))
+        else:
+            parts.append(json.dumps(getattr(a, "record", lambda a=a: repr(a))(), sort_keys=True, default=str))
+    text = "\x1f".join([*parts, __version__, mujoco.__version__])
+    return hashlib.sha1(text.encode()).hexdigest()[:20]
+
+
+def executor_for(cluster: str | None, workers: int, *, processes: bool = False) -> Threads | Processes | Cluster:
+    """The executor a command asked for: a Dask cluster (``--cluster``), or `workers` threads (or, with
+    `processes`, worker processes) here."""
+    if cluster:
+        return Cluster(cluster)
+    return Processes(workers) if processes else Threads(workers)
+
+
 def execute(
     jobs: Sequence[Job],
     settings: Settings | None,
     *,
     progress: Callable[[int, int, Job], None] | None = None,
     workers: int = 1,
-) -> Iterator[list[dict[str, Any]]]:
-    """Run the jobs, yielding each job's result rows in job order as soon as it and every job before it finished.
+    executor: Threads | Processes | Cluster | None = None,
+) -> Iterator[tuple[int, list[dict[str, Any]]]]:
+    """Run the jobs, yielding ``(index, rows)`` as each job finishes (in job order with one worker).
 
-    With ``workers > 1`` up to that many cases run at once on threads: a case's time goes to
-    `mujoco.rollout`, which steps in C without the GIL, so two cores run two cases. Each case is independent
-    and deterministic, so the rows are the same as with one worker. Closing the iterator early (an interrupt)
-    cancels the cases not yet started; those running finish in the background and are dropped.
+    Each case is independent and deterministic, so the rows do not depend on the executor or the number of
+    workers. Closing the iterator early (an interrupt) cancels the cases not yet started.
     """
-    if workers <= 1 or len(jobs) <= 1:
-        for i, job in enumerate(jobs):
-            if progress is not None:
-                progress(i, len(jobs), job)
-            yield run_job(job, settings)
-        return
-    pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rigidbench-case")
-    try:
-        futures = [pool.submit(run_job, job, settings) for job in jobs]
-        for i, (job, future) in enumerate(zip(jobs, futures, strict=True)):
-            if progress is not None:
-                progress(i, len(jobs), job)
-            yield future.result()
-    finally:
-        pool.shutdown(wait=False, cancel_futures=True)
+    executor = executor or Threads(workers)
+    for done, (i, rows) in enumerate(executor.map(run_job, [(job, settings) for job in jobs]), start=1):
+        if isinstance(rows, BaseException):  # a job that failed on a cluster (e.g. killed its workers every time)
+            rows = [error_row(jobs[i], settings, rows)]
+        if progress is not None:
+            progress(done - 1, len(jobs), jobs[i])
+        yield i, rows
 
 
 @dataclass
@@ -258,24 +459,30 @@ def run_jobs(
     previous: Mapping[str, list[dict[str, Any]]] | None = None,
     progress: Callable[[int, int, Job], None] | None = None,
     workers: int = 1,
+    executor: Threads | Processes | Cluster | None = None,
 ) -> RunResult:
-    """The one run loop: skip the jobs `previous` (a resumed journal's rows, by job key) holds, run the rest,
-    append each finished job's rows to the journal at `journal_path` (if any) as it finishes, and stop at an
-    interrupt with every finished row kept.
+    """The one run loop: skip the jobs `previous` (a resumed journal's rows, by job key) holds, run the rest on
+    `executor` (threads here by default), append each finished job's rows to the journal at `journal_path` (if
+    any) as it finishes, and stop at an interrupt with every finished row kept.
 
     The journal's header must already be written (`rigidbench.journal.start`) or read (resume).
+
+    Raises
+    ------
+    ClusterError
+        If the cluster went away; every row that came back is journaled.
     """
     from rigidbench import journal
 
     done = dict(previous or {})
     todo = [job for job in jobs if job.key not in done]
     result = RunResult(list(jobs), done)
-    batches = execute(todo, settings, progress=progress, workers=workers)
+    batches = execute(todo, settings, progress=progress, workers=workers, executor=executor)
     try:
-        for job, batch in zip(todo, batches, strict=False):
-            done[job.key] = batch
+        for i, batch in batches:
+            done[todo[i].key] = batch
             if journal_path:
-                journal.append(journal_path, job.key, batch)
+                journal.append(journal_path, todo[i].key, batch)
     except Interrupted as exc:
         result.interrupted = exc
     finally:

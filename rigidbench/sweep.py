@@ -12,11 +12,8 @@ The observed order is fitted by `observed_order`; its rule is stated there.
 
 from __future__ import annotations
 
-import concurrent.futures
 import json
 import math
-import multiprocessing
-import os
 import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -438,32 +435,20 @@ def run_point(point: Point, timed: bool = False) -> list[dict[str, Any]]:
     return rows
 
 
-def start_worker(parent: int) -> None:
-    """Set up a worker process: Ctrl-C is the parent's to handle (a terminal sends SIGINT to the whole process
-    group; the parent stops the workers), and the worker ends when the process that started it does, even by
-    SIGKILL, which runs no cleanup: on Linux the kernel sends it SIGKILL (``prctl(PR_SET_PDEATHSIG)``); elsewhere,
-    and in case the parent died before that was set, a daemon thread polls the parent's pid. Without it a killed
-    sweep leaves its workers (~120 MB each) and multiprocessing's resource tracker running for ever."""
-    import ctypes
-    import signal
-    import threading
-    import time
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG = 1
-    except (OSError, AttributeError):
-        pass
-
-    def watch() -> None:
-        while os.getppid() == parent:
-            time.sleep(0.5)
-        os._exit(1)
-
-    if os.getppid() != parent:
-        os._exit(1)
-    threading.Thread(target=watch, name="rigidbench-watch-parent", daemon=True).start()
+def _failed_row(point: Point, exc: BaseException) -> dict[str, Any]:
+    return {
+        "scenario": point.scenario,
+        "case": point.case,
+        "check": "error",
+        "status": "error",
+        "passed": None,
+        "error": None,
+        "measured": None,
+        "expected": None,
+        "message": f"{type(exc).__name__}: {exc}",
+        "settings": {"integrator": point.integrator, "timestep": point.timestep, "mujoco": mujoco.__version__},
+        "point": point.record(),
+    }
 
 
 def point_key(point: Point) -> str:
@@ -479,6 +464,7 @@ def execute(
     finished: Mapping[str, list[dict[str, Any]]] | None = None,
     on_result: Callable[[Point, list[dict[str, Any]]], None] | None = None,
     timed: bool = False,
+    executor: Any = None,
 ) -> Sweep:
     """Run every point (in `workers` processes; in this process if `workers` <= 1) and fit the orders; with
     `timed`, measure each point's cost too (`rigidbench.frontier`).
@@ -498,24 +484,14 @@ def execute(
         if progress is not None:
             progress(done, len(todo), points[i])
 
-    if workers <= 1:
-        for done, i in enumerate(todo, start=1):
-            record(i, run_point(points[i], timed), done)
-    else:
-        ctx = multiprocessing.get_context("spawn")  # no fork of a process that may hold GL or threads
-        with concurrent.futures.ProcessPoolExecutor(
-            max_workers=workers, mp_context=ctx, initializer=start_worker, initargs=(os.getpid(),)
-        ) as pool:
-            futures = {pool.submit(run_point, points[i], timed): i for i in todo}
-            try:
-                for done, future in enumerate(concurrent.futures.as_completed(futures), start=1):
-                    record(futures[future], future.result(), done)
-            except BaseException:  # Ctrl-C or a worker's error: drop what has not started, stop what runs
-                running = list((getattr(pool, "_processes", None) or {}).values())
-                pool.shutdown(wait=False, cancel_futures=True)
-                for process in running:
-                    process.terminate()
-                raise
+    from rigidbench.runner import Processes
+
+    executor = executor or Processes(workers)
+    calls = [(points[i], timed) for i in todo]
+    for done, (j, rows) in enumerate(executor.map(run_point, calls), start=1):
+        if isinstance(rows, BaseException):  # a point that failed on a cluster: a row saying so, never a traceback
+            rows = [_failed_row(points[todo[j]], rows)]
+        record(todo[j], rows, done)
     sweep = Sweep(points=list(points))
     sweep.rows = [row for rows in results if rows is not None for row in rows]
     sweep.orders = fit_orders(sweep.rows)
