@@ -280,6 +280,16 @@ def _settings_arguments(p: argparse.ArgumentParser, *, grid: bool = False) -> No
         help=f"a MuJoCo option ({', '.join(OPTIONS)}), a flag (NAME=enable|disable: {', '.join(FLAGS)}), or "
         "solref=A,B / solimp=A,B,C[,D,E] for every contact and equality constraint; repeatable",
     )
+    p.add_argument(
+        "--engine",
+        choices=("mujoco", "warp", "mjx"),
+        help="what steps the models: C MuJoCo (default), MuJoCo Warp (float32; the 'warp' extra) or MJX (JAX; the "
+        "'mjx' extra)",
+    )
+    p.add_argument("--device", metavar="DEVICE", help="the engine's device: cpu (default), cuda:0, ...")
+    p.add_argument(
+        "--precision", choices=("float32", "float64"), help="the engine's float precision (MJX: float32 by default)"
+    )
     p.add_argument("--solref", metavar="A,B", help="shorthand for --option solref=A,B")
     p.add_argument("--solimp", metavar="A,B,C[,D,E]", help="shorthand for --option solimp=...")
     if not grid:
@@ -295,13 +305,16 @@ def _settings(args: argparse.Namespace):
     for name in ("solref", "solimp"):
         if getattr(args, name, None):
             options[name] = getattr(args, name)
-    return runner.settings_for(
+    from rigidbench.settings import Settings
+
+    settings = runner.settings_for(
         args.profile,
         getattr(args, "integrator", None),
         getattr(args, "timestep", None),
         settings_from=args.settings_from,
         options=options,
     )
+    return settings.merged(Settings(engine=args.engine, device=args.device, precision=args.precision))
 
 
 def _positive_float(text: str) -> float:
@@ -650,6 +663,9 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 # What a journal restores on --resume: what to run, never where to write (issue 20), with the types it must have.
 _SETTINGS_INVOCATION = {
+    "engine": ((str, type(None)), None),
+    "device": ((str, type(None)), None),
+    "precision": ((str, type(None)), None),
     "profile": (str, None),
     "settings_from": ((str, type(None)), None),
     "options": (list, str),

@@ -25,7 +25,7 @@ from rigidbench import registry
 from rigidbench.params import Value
 from rigidbench.results import ERROR, rows_of
 from rigidbench.scenario import Scenario
-from rigidbench.settings import Settings, profile, read_settings
+from rigidbench.settings import Settings, profile
 
 Perturb = Callable[[mujoco.MjModel], None]
 
@@ -103,7 +103,9 @@ def check_job(job: Job, settings: Settings | None) -> Job:
         prep = job.scenario.prepare(job.case, job.overrides, settings)
     except ValueError as exc:
         raise type(exc)(*_prefixed(exc, job.name)) from None
-    return dataclasses.replace(job, expected=(read_settings(prep.model), len(prep.case.checks)))
+    return dataclasses.replace(
+        job, expected=(job.scenario.settings_record(prep.model, settings), len(prep.case.checks))
+    )
 
 
 def _prefixed(exc: ValueError, name: str) -> tuple:

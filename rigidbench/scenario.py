@@ -23,6 +23,7 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
+from rigidbench.engines import use as use_engine
 from rigidbench.params import Bound, Param, Range, Value, check_known
 from rigidbench.settings import DERIVED_TEXT, Settings, read_settings, skip_idle_stages
 from rigidbench.simulate import Timing, Trajectory, check_run_size, simulate, steps_for, time_calls, time_stepping
@@ -433,7 +434,21 @@ class Scenario:
                 raise ValueError(f"scenario '{self.slug}': MuJoCo refused the model: {exc}") from None
         self.check_model(model)
         skip_idle_stages(model)
+        engine = settings.engine_object() if settings is not None else None
+        if engine is not None:
+            try:
+                engine.check(model)  # refuse what the engine lacks, before anything is simulated
+            except ValueError as exc:
+                raise ValueError(f"scenario '{self.slug}': {exc}") from None
         return model
+
+    def settings_record(self, model: mujoco.MjModel, settings: Settings | None) -> dict:
+        """The settings a compiled model runs with, read back in full (`read_settings`), and the engine's
+        record (name, version, device, precision) that every result row carries."""
+        from rigidbench.engines import Engine
+
+        engine = (settings.engine_object() if settings is not None else None) or Engine()
+        return {**read_settings(model), **engine.record()}
 
     def _apply_derived(self, spec: mujoco.MjSpec, params: Mapping[str, Value], settings: Settings | None) -> None:
         """Write the settings that follow the parameters into `spec`, and their rules as the model's custom text
@@ -530,18 +545,20 @@ class Scenario:
         if perturb is not None:
             simulated = copy.copy(model)
             perturb(simulated)
-        c0, t0 = _time.process_time(), _time.perf_counter()
-        traj = self.simulate(simulated, data, prep.duration, control=control)
-        wall = _time.perf_counter() - t0
-        cpu = _time.process_time() - c0
-        timing = None
-        if timed and traj.diverged_at is None:
-            if type(self).simulate is Scenario.simulate:
-                timing = time_stepping(simulated, traj, control, first=(cpu, wall))
-            else:
-                timing = time_calls(
-                    lambda: self.simulate(simulated, data, prep.duration, control=control), steps=prep.nstep
-                )
+        engine = settings.engine_object() if settings is not None else None
+        with use_engine(engine):  # `rigidbench.simulate` steps with it; scenario code never branches on it
+            c0, t0 = _time.process_time(), _time.perf_counter()
+            traj = self.simulate(simulated, data, prep.duration, control=control)
+            wall = _time.perf_counter() - t0
+            cpu = _time.process_time() - c0
+            timing = None
+            if timed and traj.diverged_at is None:
+                if type(self).simulate is Scenario.simulate and engine is None:
+                    timing = time_stepping(simulated, traj, control, first=(cpu, wall))
+                else:  # a scenario's own simulate, or a batched engine: whole calls (per-world cost of a batch)
+                    timing = time_calls(
+                        lambda: self.simulate(simulated, data, prep.duration, control=control), steps=prep.nstep
+                    )
         outcomes = []
         if traj.diverged_at is None:
             measured = self.measure(model, traj, prediction)
@@ -553,7 +570,7 @@ class Scenario:
             scenario=self.slug,
             case=prep.case.name,
             params=prep.params,
-            settings=read_settings(model),
+            settings=self.settings_record(model, settings),
             outcomes=outcomes,
             diverged_at=traj.diverged_at,
             duration=prep.duration,

@@ -272,6 +272,12 @@ class Settings:
         Any other field of `OPTIONS` (solver, iterations, tolerance, impratio, jacobian, noslip_*, o_*, ...).
     flags : tuple of (name, bool)
         `FLAGS` set: True enables, False disables (``warmstart``, ``energy``, ``override``, ...).
+    engine : {"mujoco", "warp", "mjx"} or None
+        What steps the model (`rigidbench.engines`); None is C MuJoCo.
+    device : str or None
+        The engine's device (``"cpu"``, ``"cuda:0"``); None is the CPU.
+    precision : {"float32", "float64"} or None
+        The engine's float precision (MJX only has a choice; None is the engine's default).
     """
 
     integrator: str | None = None
@@ -282,6 +288,9 @@ class Settings:
     samples: int | None = None
     options: tuple[tuple[str, Any], ...] = ()
     flags: tuple[tuple[str, bool], ...] = ()
+    engine: str | None = None
+    device: str | None = None
+    precision: str | None = None
 
     def __post_init__(self) -> None:
         if self.integrator is not None and self.integrator not in INTEGRATORS:
@@ -299,6 +308,20 @@ class Settings:
         for name, _ in self.flags:
             if name not in FLAGS:
                 raise ValueError(f"flag {name!r} is not one of {', '.join(FLAGS)}")
+        if self.precision not in (None, "float32", "float64"):
+            raise ValueError(f"precision {self.precision!r} is not float32 or float64")
+
+    def engine_object(self):
+        """The engine these settings simulate with (`rigidbench.engines.engine_for`; None: C MuJoCo).
+
+        Raises
+        ------
+        ValueError
+            For an unknown or uninstalled engine, or a device or precision it does not have.
+        """
+        from rigidbench.engines import engine_for
+
+        return engine_for(self.engine, device=self.device, precision=self.precision)
 
     @classmethod
     def from_options(cls, items: Mapping[str, object], flags: Mapping[str, object] | None = None) -> Settings:

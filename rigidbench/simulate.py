@@ -114,6 +114,8 @@ def simulate(
     ValueError
         See `steps_for`; or if `control` has the wrong shape.
     """
+    from rigidbench import engines
+
     nstep = steps_for(duration, model.opt.timestep)
     state0 = get_state(model, data)
     kwargs = {}
@@ -122,6 +124,10 @@ def simulate(
         if control.shape != (nstep, model.nu):
             raise ValueError(f"control has shape {control.shape}, expected ({nstep}, {model.nu})")
         kwargs["control"] = control[None]
+    engine = engines.current()
+    if engine is not None:  # MuJoCo Warp or MJX (`rigidbench.engines`): float64 states back, same layout
+        states = np.concatenate([state0[None], engine.rollout(model, state0[None], nstep, kwargs.get("control"))[0]])
+        return split_states(model, states)
     # Row 0 is the initial state; rollout writes the nstep states after it in place (no copy afterwards). It
     # steps the MjData it is given: a scratch copy keeps `data` at the initial state, as promised.
     states = np.empty((nstep + 1, state0.size))
@@ -216,10 +222,20 @@ def final_states(
         raise ValueError(f"states0 has {states0.shape[1]} columns, expected {mujoco.mj_stateSize(base, STATE)}")
     if models is not None and len(models) != len(states0):
         raise ValueError(f"{len(models)} models for {len(states0)} states")
+    from rigidbench import engines
+
     nthread = (os.cpu_count() or 1) if nthread is None else int(nthread)
     datas = [mujoco.MjData(base) for _ in range(max(nthread, 1))]
     out = np.empty_like(states0)
-    for lo in range(0, len(states0), chunk):
+    engine = engines.current()
+    if engine is not None and models is not None:
+        for i, (m, s0) in enumerate(zip(models, states0, strict=True)):  # one model each (e.g. a stiffness each)
+            out[i] = engine.rollout(m, s0[None], nstep)[0, -1]
+    elif engine is not None:
+        for lo in range(0, len(states0), chunk):
+            hi = min(lo + chunk, len(states0))
+            out[lo:hi] = engine.rollout(base, states0[lo:hi], nstep)[:, -1]  # one batch of worlds per chunk
+    for lo in range(0, len(states0) if engine is None else 0, chunk):
         hi = min(lo + chunk, len(states0))
         m = models[lo:hi] if models is not None else base
         states, _ = rollout.rollout(m, datas, states0[lo:hi], nstep=nstep)
