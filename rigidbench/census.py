@@ -104,6 +104,10 @@ def _interval(bound: Range | Bound | None, values: Mapping[str, Value]) -> Range
 def _intersect(a: Range, b: Range | None) -> Range:
     if b is None:
         return a
+    if a.magnitude != b.magnitude:  # a signed range symmetric about 0 and a range of magnitudes: magnitudes
+        signed, sized = (a, b) if b.magnitude else (b, a)
+        top = min(abs(signed.low), abs(signed.high))
+        return Range(sized.low, min(sized.high, top), sized.low_open, sized.high_open, magnitude=True)
     if a.low != b.low:
         low, low_open = (a.low, a.low_open) if a.low > b.low else (b.low, b.low_open)
     else:
@@ -112,7 +116,7 @@ def _intersect(a: Range, b: Range | None) -> Range:
         high, high_open = (a.high, a.high_open) if a.high < b.high else (b.high, b.high_open)
     else:
         high, high_open = a.high, a.high_open or b.high_open
-    return Range(low, high, low_open, high_open)
+    return Range(low, high, low_open, high_open, magnitude=a.magnitude)
 
 
 def sampling_range(scenario: Scenario, case: Case, p: Param, values: Mapping[str, Value]) -> Range:
@@ -134,9 +138,12 @@ def _inside(r: Range) -> tuple[float, float]:
 def draw_value(r: Range, rng: np.random.Generator, *, edge: str | None = None, integer: bool = False) -> float:
     """One number drawn from `r` (see the module docstring); `edge` = ``"low"`` or ``"high"`` puts it within
     `EDGE_SPAN` of that end."""
+    if r.magnitude:  # a size from the range and a random sign
+        size = draw_value(Range(r.low, r.high, r.low_open, r.high_open), rng, edge=edge, integer=integer)
+        return size if rng.random() < 0.5 else -size
     low, high = _inside(r)
     if not low <= high:
-        raise ValueError(f"empty range {r}")
+        raise EmptyRange(f"empty range {r}")
     if integer:
         lo, hi = math.ceil(low), math.floor(high)
         if edge is not None:
@@ -192,9 +199,34 @@ def _order(scenario: Scenario, case: Case) -> list[Param]:
     return ordered
 
 
+# Redraws of one set whose dependent range came out empty (the region is sampled by rejection).
+MAX_REDRAWS = 1000
+
+
+class EmptyRange(ValueError):
+    """A dependent range that is empty for the values drawn before it."""
+
+
 def draw(scenario: Scenario, case: Case, rng: np.random.Generator) -> dict[str, Value]:
     """One random parameter set for `case`: every parameter the case does not derive, inside the ranges that
-    `rigidbench list` prints for it (module docstring)."""
+    `rigidbench list` prints for it (module docstring). A dependent range that comes out empty for the values drawn
+    before it (e.g. no spring constant puts a tiny attachment height in a coupling regime) means those values lie
+    outside the case's region: the set is drawn again (rejection sampling), up to `MAX_REDRAWS` times.
+
+    Raises
+    ------
+    ValueError
+        If no set is found in `MAX_REDRAWS` draws (the regime is too narrow to sample).
+    """
+    for _ in range(MAX_REDRAWS):
+        try:
+            return _draw_once(scenario, case, rng)
+        except EmptyRange:
+            continue
+    raise ValueError(f"{scenario.slug}:{case.name}: no parameter set inside its ranges in {MAX_REDRAWS} draws")
+
+
+def _draw_once(scenario: Scenario, case: Case, rng: np.random.Generator) -> dict[str, Value]:
     derived = {name for name, v in case.values.items() if callable(v)}
     free = [p for p in _order(scenario, case) if p.name not in derived]
     edges: dict[str, str] = {}

@@ -270,20 +270,24 @@ def _unwrap(data: np.ndarray) -> Value:
 
 @dataclass(frozen=True)
 class Range:
-    """An interval of valid values; `low_open`/`high_open` exclude the end point."""
+    """An interval of valid values; `low_open`/`high_open` exclude the end point. With `magnitude`, the interval
+    holds |x| (a value of either sign whose size lies in it, e.g. an amplitude between a floor and a ceiling)."""
 
     low: float
     high: float
     low_open: bool = False
     high_open: bool = False
+    magnitude: bool = False
 
     def __contains__(self, x: float) -> bool:
+        x = abs(x) if self.magnitude else x
         above = x > self.low if self.low_open else x >= self.low
         below = x < self.high if self.high_open else x <= self.high
         return above and below
 
     def __str__(self) -> str:
-        return f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+        text = f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+        return f"|x| in {text}" if self.magnitude else text
 
 
 def positive(high: float) -> Range:
