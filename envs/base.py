@@ -61,6 +61,9 @@ class ScenarioEnv(gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 30}
     scenario_cls: ClassVar[type[Scenario]]
     default_frame_skip: ClassVar[int] = 10
+    # Attributes a copy or a pickle leaves out because the env recomputes them when it needs them (caches that
+    # may hold what cannot be pickled, e.g. a solver's dense output).
+    _recomputed: ClassVar[tuple[str, ...]] = ()
 
     def __init__(
         self,
@@ -276,6 +279,8 @@ class ScenarioEnv(gym.Env):
         point into this env's MjData and are rebound to the copy's (`__setstate__`)."""
         state = self.__dict__.copy()
         state["_renderer"] = None
+        for name in self._recomputed:
+            state.pop(name, None)
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:

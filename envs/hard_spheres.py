@@ -543,6 +543,9 @@ class HardSpheresEnv(ScenarioEnv):
     def _apply_action(self, action: np.ndarray) -> None:
         self._force[:] = action
 
+    # The soft-contact solution (a closure over scipy's dense output): solved again by a copy that needs it.
+    _recomputed: ClassVar[tuple[str, ...]] = ("_motion", "_motion_for")
+
     # Observables compared with theory: the relative position r = x1 - x2 (m), world frame.
     observables: ClassVar[tuple[str, ...]] = ("r_x", "r_y", "r_z")
 

@@ -127,6 +127,11 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
         self._R = np.empty((3, 3))
         self._R9 = self._R.reshape(9)  # a view: what mju_quat2Mat fills
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        super().__setstate__(state)
+        if "_R" in state:  # a copy holds `_R` and `_R9` as arrays of their own: make `_R9` its view again
+            self._R9 = self._R.reshape(9)
+
     def _target_ranges(self) -> dict[str, tuple[float, float]]:
         return {"tilt": TILT_RANGE}
 

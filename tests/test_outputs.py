@@ -148,13 +148,19 @@ def test_a_write_failure_leaves_the_previous_file_whole_and_no_temporary_file(tm
 
 
 def test_a_journal_that_cannot_take_a_whole_job_stops_the_run_loudly(tmp_path):
+    command = [sys.executable, "-m", "rigidbench", "run", "pendulum", "--quiet", "--jobs", "1", "--jsonl"]
+    whole = tmp_path / "whole.jsonl"
+    subprocess.run([*command, str(whole)], capture_output=True, check=True)
+    lines = whole.read_bytes().splitlines(keepends=True)
+    first = json.loads(lines[1])["job"]
+    size = len(lines[0]) + sum(len(x) for x in lines[1:] if json.loads(x)["job"] == first)
     path = tmp_path / "run.jsonl"
     proc = subprocess.run(
-        [sys.executable, "-m", "rigidbench", "run", "pendulum", "--quiet", "--jobs", "1", "--jsonl", str(path)],
+        [*command, str(path)],
         capture_output=True,
         text=True,
         check=False,
-        preexec_fn=_limited(4000),  # the header and a job or two fit, not all four
+        preexec_fn=_limited(size + 200),  # the header and the first job fit, not the second one whole
     )
     assert proc.returncode == 2, proc.stderr
     assert "cannot append to journal" in proc.stderr and "Traceback" not in proc.stderr

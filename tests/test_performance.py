@@ -53,12 +53,12 @@ def test_cases_on_two_threads_give_the_rows_of_one_thread_in_job_order():
     settings = profile("reference")
     jobs = runner.plan(["heavy-top:nutation", "heavy-top:fast-precession", "pendulum:small-amplitude"], {}, settings)
     seen = []
-    one = [r for rows in runner.execute(jobs, settings) for r in rows]
-    threaded = runner.execute(jobs, settings, workers=2, progress=lambda i, n, job: seen.append(i))
-    two = [r for rows in threaded for r in rows]
+    one = [r for _, rows in runner.execute(jobs, settings) for r in rows]
+    threaded = sorted(runner.execute(jobs, settings, workers=2, progress=lambda i, n, job: seen.append(i)))
+    two = [r for _, rows in threaded for r in rows]  # rows come as jobs complete; each names its job's index
     strip = [{k: v for k, v in r.items() if k not in VOLATILE} for r in one]
     assert strip == [{k: v for k, v in r.items() if k not in VOLATILE} for r in two]
-    assert seen == [0, 1, 2]
+    assert sorted(seen) == [0, 1, 2]
 
 
 def test_closing_a_threaded_run_early_cancels_the_cases_not_started():
@@ -193,7 +193,7 @@ def test_idle_stages_finds_what_can_collide_or_constrain():
     assert stages(one_body) == ("contact",)
     for slug, disabled in (("pendulum", ("contact", "constraint")), ("hard-spheres", ())):
         scenario = registry.get(slug)
-        assert read_settings(scenario.build(scenario.resolve(scenario.cases[0])))["disabled"] == disabled
+        assert set(read_settings(scenario.build(scenario.resolve(scenario.cases[0])))["disabled"]) == set(disabled)
 
 
 # ---- the percussion envs (rigidbench.envs.planar.BlowEnv): float fast paths against the PlanarMotion arrays ----

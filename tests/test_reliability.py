@@ -60,8 +60,9 @@ def test_a_torn_last_line_is_ignored_and_its_job_redone(tmp_path):
     text = open(path).read()
     with open(path, "w") as f:
         f.write(text[: len(text) - 40])  # power loss in the middle of the last row
+    last = json.loads(text.splitlines()[-1])["job"]  # jobs are journaled as they complete, in any order
     record = journal.read(path, "run")
-    assert record.done == {"heavy-top:nutation"}
+    assert record.done == {"heavy-top:nutation", "heavy-top:looping"} - {last}
     assert cli.main(["run", "--quiet", "--resume", path]) == 0
     assert journal.read(path, "run").done == {"heavy-top:nutation", "heavy-top:looping"}
 

@@ -177,7 +177,7 @@ def test_report_of_fresh_contact_results_renders_their_settings_and_figures():
 
     reference = runner.settings_for("reference")
     jobs = runner.plan(["ball-stick:light-ball"], {}, reference)
-    rows = [row for batch in runner.execute(jobs, reference) for row in batch]
+    rows = [row for _, batch in runner.execute(jobs, reference) for row in batch]
     assert any(isinstance(row["settings"].get("solref"), tuple) for row in rows)
     page = report.build([results.document(rows)])
     assert "<h2>Settings</h2>" in page and "<td>((-100000000.0, 0.0),)</td>" in page
