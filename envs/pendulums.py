@@ -26,6 +26,7 @@ import numpy as np
 from rigidbench import signals
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.params import Value
+from rigidbench.scenario import Derived
 
 # The energy check shared by the spring-coupled pendulums (coupled pair and chain): RK4 at their 2 ms step.
 SPRING_CHAIN_ENERGY_REASON = (
@@ -34,6 +35,26 @@ SPRING_CHAIN_ENERGY_REASON = (
 SPRING_CHAIN_ENERGY = (
     "E = sum 1/2 I_O th'^2 + m g l (1 - cos th) + 1/2 k (L - L0)^2 conserved (relative to its initial value)"
 )
+
+# The reference step of the model files (s): the derived timestep equals it at each model's defaults.
+REFERENCE_TIMESTEP = 2e-3
+
+
+def timestep_for(omega_max: float, omega_default: float, what: str) -> Derived:
+    """The reference timestep for a fastest angular rate `omega_max` (rad/s): ``dt = c / omega_max`` with ``c =
+    2 ms x omega_default`` (the model file's step times the same rate at the model's defaults), so that every set
+    of parameters is integrated at the ``omega dt`` that the default cases are, and at the defaults dt is 2 ms.
+
+    RK4's relative frequency error is (omega dt)^4 / 120 and its relative energy drift per period ~ 2 pi (omega
+    dt)^5 / 72: both then stay what they are at the defaults, whatever the time scales. `what` names omega_max.
+    """
+    c = REFERENCE_TIMESTEP * omega_default
+    return Derived(
+        REFERENCE_TIMESTEP * (omega_default / omega_max),
+        f"dt = {c:.4g} / omega_max (omega_max dt as at the model's defaults, where dt = 2 ms: RK4 frequency error "
+        f"(omega dt)^4/120 = {c**4 / 120:.1e}); omega_max = {what} = {omega_max:.6g} rad/s",
+    )
+
 
 BODY, HINGE, BOB_SITE, SPRING_SITE, ROD, BALL = "pendulum", "hinge", "bob", "spring", "rod", "ball"
 _QPOS_QVEL = mujoco.mjtState.mjSTATE_QPOS | mujoco.mjtState.mjSTATE_QVEL
