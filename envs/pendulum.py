@@ -158,7 +158,8 @@ class SimplePendulumEnv(PendulumEnv):
 
     Arguments
         ``case`` (one-radian, small-amplitude, large-amplitude, near-inverted), ``params`` (length, amplitude,
-        g), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10: 20 ms at the defaults, the derived step times 10), ``render_mode``.
+        g), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10: ten derived steps, 20 ms at the
+        defaults), ``render_mode``.
 
     Version History
         v0: initial version.
