@@ -185,6 +185,15 @@ def coupled_frequencies(inertia_pivot: float, mgl: float, stiffness: float, heig
     return float(np.sqrt(ws2)), float(np.sqrt(ws2 + 2 * stiffness * height**2 / inertia_pivot))
 
 
+def coupled_modes(inertia_pivot: float, mgl: float, stiffness: float, height: float) -> NormalModes:
+    """Normal modes of the coupled pair with the shapes fixed by symmetry: (1, 1) and (1, -1) over sqrt(2 I_O)
+    ([T] O3). The same as `normal_modes` of `spring_chain_matrices` (2, ...), but exact however weak the coupling:
+    an eigensolver's vectors turn arbitrarily in the plane of two (numerically) equal frequencies."""
+    T, V = spring_chain_matrices(2, inertia_pivot, mgl, stiffness, height)
+    shapes = np.array([[1.0, 1.0], [1.0, -1.0]]) / np.sqrt(2 * inertia_pivot)
+    return NormalModes(np.array(coupled_frequencies(inertia_pivot, mgl, stiffness, height)), shapes, T, V)
+
+
 def chain_frequencies(n: int, inertia_pivot: float, mgl: float, stiffness: float, height: float) -> np.ndarray:
     """Mode frequencies (rad/s), ascending, of the free-ended chain: [T] O5.
 
@@ -193,6 +202,15 @@ def chain_frequencies(n: int, inertia_pivot: float, mgl: float, stiffness: float
     r = np.arange(n)
     kappa = stiffness * height**2 / inertia_pivot
     return np.sqrt(mgl / inertia_pivot + 4 * kappa * np.sin(r * np.pi / (2 * n)) ** 2)
+
+
+def chain_modes(n: int, inertia_pivot: float, mgl: float, stiffness: float, height: float) -> NormalModes:
+    """Normal modes of the free-ended chain with the O5 shapes (`chain_shapes`, normalised ``a^T T a = 1``) and the
+    O5 frequencies: exact however weak the coupling ([T] O5), where an eigensolver's vectors turn arbitrarily
+    among (numerically) equal frequencies."""
+    T, V = spring_chain_matrices(n, inertia_pivot, mgl, stiffness, height)
+    shapes = chain_shapes(n) / np.sqrt(inertia_pivot)
+    return NormalModes(chain_frequencies(n, inertia_pivot, mgl, stiffness, height), shapes, T, V)
 
 
 def chain_shapes(n: int) -> np.ndarray:
@@ -227,8 +245,9 @@ class Beats:
 
     @property
     def transfer_time(self) -> float:
-        """T_x = pi / (omega_a - omega_s) (s): all the energy is in pendulum 2 ([T] O4)."""
-        return np.pi / (self.omega_a - self.omega_s)
+        """T_x = pi / (omega_a - omega_s) (s): all the energy is in pendulum 2 ([T] O4); inf for uncoupled modes."""
+        split = self.omega_a - self.omega_s
+        return float(np.pi / split) if split > 0 else float("inf")
 
     def angles(self, t: np.ndarray) -> np.ndarray:
         """(th1, th2) (rad), shape (len(t), 2)."""

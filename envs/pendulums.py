@@ -32,6 +32,41 @@ from rigidbench.scenario import Derived
 SPRING_CHAIN_ENERGY_REASON = (
     "RK4 is not symplectic: relative drift ~ T (omega dt)^6 / (72 dt) <~ 2e-10 over the run; 1e-8 leaves 1.5 decades"
 )
+# Pivot spacing s (m) of the spring-coupled models (``coupled_pendulums.xml``: pivots at x = -+0.25 m;
+# ``pendulum_chain.xml``: its ``spacing``): the springs' rest length.
+PIVOT_SPACING = 0.5
+# Double precision. MuJoCo computes gravity's torque and the springs' lengths from world positions: a lever arm
+# l sin th, or a stretch d sin th, measured against pivots up to X from the origin carries an absolute error ~ eps X,
+# so the restoring torque has a relative error rho = eps X (M g + k d) / ((M g l + k d^2) |a|) (a = the largest
+# release angle). Measured (census draws at amplitudes 1e-14 .. 1e-7 rad): energy drift 4 .. 5.4 rho, frequencies
+# 1e-3 .. 0.04 rho, mode purity 0.01 .. 0.14 rho. At the defaults rho ~ 1e-13 and no check feels it; each check's
+# tolerance is its own, or this floor times a factor ~10 above the measured ratio if larger.
+ROUNDOFF = (
+    "; floor {factor} rho if larger, rho = eps X (M g + k d) / ((M g l + k d^2) |a|): the restoring torque's relative "
+    "double-precision error, MuJoCo's lever arms and spring lengths being differences of world positions up to X from "
+    "the origin (measured {measured}; rho ~ 1e-13 at the defaults)"
+)
+
+
+def roundoff(model: mujoco.MjModel, amplitude: float) -> float:
+    """rho (see `ROUNDOFF`): the relative double-precision error of the restoring torque of side-by-side pendulums,
+    released at `amplitude` (rad, the largest angle)."""
+    pend = pendulums(model)
+    p, g = pend[0], gravity(model)
+    sp = springs(model)
+    k = float(sp.stiffness.max()) if len(sp.stiffness) else 0.0
+    d = sp.height if len(sp.stiffness) else 0.0
+    extent = max(abs(q.pivot_x) for q in pend)
+    eps = np.finfo(float).eps
+    return float(eps * extent * (p.mass * g + k * d) / ((p.mass * g * p.length + k * d * d) * abs(amplitude)))
+
+
+def spring_collapse_limit(height: float) -> float:
+    """Largest release angle (rad) at which two neighbouring attachment points, d below pivots s apart, stay at
+    least s/10 apart when the pendulums swing against each other (2 d sin a <= 0.9 s)."""
+    return float(np.arcsin(min(1.0, 0.45 * PIVOT_SPACING / height)))
+
+
 SPRING_CHAIN_ENERGY = (
     "E = sum 1/2 I_O th'^2 + m g l (1 - cos th) + 1/2 k (L - L0)^2 conserved (relative to its initial value)"
 )
