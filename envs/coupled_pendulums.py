@@ -30,6 +30,7 @@ d) and, where both modes are excited, kappa >= 2e-3 (T_x <= 250 carrier periods)
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from typing import Any
 
@@ -281,8 +282,7 @@ class CoupledPendulums(Scenario):
 
     def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
         """The timestep follows the faster mode, omega_a (2 ms at the model's defaults)."""
-        omega = _omegas(params)[1]
-        return {"timestep": pendulums.timestep_for(omega, _omegas(self.defaults())[1], "omega_a")}
+        return {"timestep": pendulums.timestep_for(_omegas(params)[1], _rate0(type(self)), "omega_a")}
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         data.qpos[:] = [params["amplitude1"], params["amplitude2"]]
@@ -357,6 +357,11 @@ class CoupledPendulums(Scenario):
                 pendulums.row_energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]
             ),
         }
+
+
+@functools.cache
+def _rate0(cls: type[CoupledPendulums]) -> float:
+    return pendulums.default_rate(cls(), lambda p: _omegas(p)[1])
 
 
 def _roundoff_tolerances(

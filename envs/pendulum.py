@@ -7,6 +7,7 @@ the origin, a point bob at ``length`` below it).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from typing import Any
 
@@ -83,7 +84,7 @@ class Pendulum(Scenario):
     def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
         """The timestep follows the fastest rate: sqrt(g/l), or the bob's rate at the bottom, 2 sqrt(g/l) sin(a/2),
         when larger (a near-inverted release swings through the bottom at up to twice sqrt(g/l))."""
-        return {"timestep": pendulums.timestep_for(_omega_max(params), _omega_max(self.defaults()), _OMEGA_MAX)}
+        return {"timestep": pendulums.timestep_for(_omega_max(params), _rate0(type(self)), _OMEGA_MAX)}
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         data.qpos[0] = params["amplitude"]
@@ -127,6 +128,11 @@ _OMEGA_MAX = "sqrt(g/l) max(1, 2 sin(amplitude/2))"
 def _omega_max(params: Mapping[str, Any]) -> float:
     """The pendulum's fastest rate (rad/s): sqrt(g/l), or its angular speed at the bottom if larger."""
     return float(np.sqrt(params["g"] / params["length"]) * max(1.0, 2 * np.sin(params["amplitude"] / 2)))
+
+
+@functools.cache
+def _rate0(cls: type[Pendulum]) -> float:
+    return pendulums.default_rate(cls(), _omega_max)
 
 
 class SimplePendulumEnv(PendulumEnv):

@@ -205,7 +205,7 @@ class PendulumChain(Scenario):
 
     def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
         """The timestep follows the highest mode (2 ms at the model's defaults)."""
-        return {"timestep": pendulums.timestep_for(_highest(params), _highest(self.defaults()), "omega_highest")}
+        return {"timestep": pendulums.timestep_for(_highest(params), _rate0(type(self)), "omega_highest")}
 
     def validate(self, params: Mapping[str, Any]) -> None:
         if params["amplitude"] == 0:
@@ -271,6 +271,11 @@ class PendulumChain(Scenario):
                 pendulums.row_energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]
             ),
         }
+
+
+@functools.cache
+def _rate0(cls: type[PendulumChain]) -> float:
+    return pendulums.default_rate(cls(), _highest)
 
 
 def _roundoff_tolerances(rho: float) -> dict[str, float]:

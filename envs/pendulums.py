@@ -77,18 +77,25 @@ REFERENCE_TIMESTEP = 2e-3
 
 def timestep_for(omega_max: float, omega_default: float, what: str) -> Derived:
     """The reference timestep for a fastest angular rate `omega_max` (rad/s): ``dt = c / omega_max`` with ``c =
-    2 ms x omega_default`` (the model file's step times the same rate at the model's defaults), so that every set
-    of parameters is integrated at the ``omega dt`` that the default cases are, and at the defaults dt is 2 ms.
+    2 ms x omega_default``, `omega_default` being the smallest fastest rate of the scenario's default cases
+    (`default_rate`): every default case is integrated at a step no longer than the model file's 2 ms, the slowest
+    at exactly 2 ms, and every other set of parameters at the same ``omega dt``.
 
     RK4's relative frequency error is (omega dt)^4 / 120 and its relative energy drift per period ~ 2 pi (omega
-    dt)^5 / 72: both then stay what they are at the defaults, whatever the time scales. `what` names omega_max.
+    dt)^5 / 72: both then stay what they are in the default cases, whatever the time scales. `what` names
+    omega_max.
     """
     c = REFERENCE_TIMESTEP * omega_default
     return Derived(
         REFERENCE_TIMESTEP * (omega_default / omega_max),
-        f"dt = {c:.4g} / omega_max (omega_max dt as at the model's defaults, where dt = 2 ms: RK4 frequency error "
-        f"(omega dt)^4/120 = {c**4 / 120:.1e}); omega_max = {what} = {omega_max:.6g} rad/s",
+        f"dt = {c:.4g} / omega_max (omega_max dt = {c:.3g}, as in the default cases, where dt <= 2 ms: RK4 frequency "
+        f"error (omega dt)^4/120 = {c**4 / 120:.1e}); omega_max = {what} = {omega_max:.6g} rad/s",
     )
+
+
+def default_rate(scenario, rate) -> float:
+    """The smallest of `rate(params)` (rad/s) over the scenario's cases at their default parameters."""
+    return min(rate(scenario.resolve(case)) for case in scenario.cases)
 
 
 BODY, HINGE, BOB_SITE, SPRING_SITE, ROD, BALL = "pendulum", "hinge", "bob", "spring", "rod", "ball"
