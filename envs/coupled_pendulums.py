@@ -41,7 +41,7 @@ from rigidbench.analytic import oscillations as osc
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, PendulumEnv, RodLength, SpringHeight, SpringStiffness
 from rigidbench.params import Bound, Gravity, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Scenario
+from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.simulate import Trajectory
 
 _FREQ = (
@@ -275,6 +275,16 @@ class CoupledPendulums(Scenario):
         ),
     )
     checks = CHECKS
+    domains = (
+        Domain(
+            "double-precision",
+            "O3/O4 measured in MuJoCo",
+            pendulums.ROUNDOFF_DOMAIN_TEXT,
+            lambda p: pendulums.roundoff_outside(
+                p, pendulums.PIVOT_SPACING / 2, max(abs(float(p["amplitude1"])), abs(float(p["amplitude2"])))
+            ),
+        ),
+    )
 
     def validate(self, params: Mapping[str, Any]) -> None:
         if params["amplitude1"] == 0 and params["amplitude2"] == 0:

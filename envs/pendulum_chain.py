@@ -35,7 +35,7 @@ from rigidbench.analytic import oscillations as osc
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, ChainSize, PendulumEnv, RodLength, SpringHeight, SpringStiffness
 from rigidbench.params import Bound, Gravity, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Params, Scenario
+from rigidbench.scenario import Case, Check, Derived, Domain, Params, Scenario
 from rigidbench.simulate import Trajectory
 
 MAX_PENDULUMS = 40
@@ -198,6 +198,16 @@ class PendulumChain(Scenario):
         ),
     )
     checks = CHECKS
+    domains = (
+        Domain(
+            "double-precision",
+            "O5/O7 measured in MuJoCo",
+            pendulums.ROUNDOFF_DOMAIN_TEXT,
+            lambda p: pendulums.roundoff_outside(
+                p, (round(p["n"]) - 1) / 2 * pendulums.PIVOT_SPACING, float(p["amplitude"])
+            ),
+        ),
+    )
 
     def defaults(self) -> Params:
         """Defaults from the model file, with the chain built at its default size (the raw file is the template)."""

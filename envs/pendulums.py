@@ -15,9 +15,9 @@ l^2`` read back from the compiled model (THEORY.md O2).
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import mujoco
@@ -46,6 +46,28 @@ ROUNDOFF = (
     "double-precision error, MuJoCo's lever arms and spring lengths being differences of world positions up to X from "
     "the origin (measured {measured}; rho ~ 1e-13 at the defaults)"
 )
+
+
+ROUNDOFF_MAX = 1e-2
+ROUNDOFF_DOMAIN_TEXT = (
+    "rho = eps X (M g + k d) / ((M g l + k d^2) |a|) <= 1e-2: the restoring torque, computed by MuJoCo from world "
+    "positions up to X from the origin, is resolved in double precision (at rho ~ 1 the release is below the "
+    "rounding of the model's coordinates and no oscillation can be measured; below 1e-2 the checks' tolerances "
+    "include a floor ~ rho, their reasons say how)"
+)
+
+
+def roundoff_outside(params: Mapping[str, Any], extent: float, amplitude: float) -> str | None:
+    """The double-precision domain's test (`ROUNDOFF_DOMAIN_TEXT`) from requested parameters: None inside, else a
+    phrase naming the parameters."""
+    m, g, length, k, d = (float(params[x]) for x in ("mass", "g", "length", "k", "d"))
+    rho = np.finfo(float).eps * extent * (m * g + k * d) / ((m * g * length + k * d * d) * abs(amplitude))
+    if rho <= ROUNDOFF_MAX:
+        return None
+    return (
+        f"amplitude {amplitude:g} rad with length = {length:g} m, d = {d:g} m, pivots up to {extent:g} m out "
+        f"(rho = {rho:.2g})"
+    )
 
 
 def roundoff(model: mujoco.MjModel, amplitude: float) -> float:
