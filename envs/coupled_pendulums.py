@@ -184,7 +184,7 @@ def amplitude_limit(p: Mapping[str, Any]) -> float:
 
 def _beats_regime(kappa: tuple[float, float]) -> dict[str, Range | Bound]:
     amplitude = Bound(
-        "[-a_max, a_max], a_max from the first-order amplitude shift (case regime)",
+        "[-a_max, a_max], a_max(mass, length, k, d, g) from the first-order amplitude shift (case regime)",
         lambda p: Range(-amplitude_limit(p), amplitude_limit(p)),
         ("mass", "length", "k", "d", "g"),
     )

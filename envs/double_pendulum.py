@@ -123,7 +123,7 @@ def amplitude_limit(p: Mapping[str, Any], mode: int | None) -> float:
 
 def _amplitude_regime(mode: int | None) -> Bound:
     return Bound(
-        "[-a_max, a_max], a_max from the first-order amplitude shift (case regime)",
+        "[-a_max, a_max], a_max(mass1, mass2, length1, length2, g) from the first-order amplitude shift (case regime)",
         lambda p: Range(-amplitude_limit(p, mode), amplitude_limit(p, mode)),
         ("mass1", "mass2", "length1", "length2", "g"),
     )

@@ -115,7 +115,7 @@ KAPPA_MAX = (10.0**2 - 1) / 4
 SHIFT_SHARE = 0.25
 _REGIME = {
     "amplitude": Bound(
-        "[-a_max, a_max], a_max from the first-order amplitude shift (case regime)",
+        "[-a_max, a_max], a_max(n, mass, length, k, d, g) from the first-order amplitude shift (case regime)",
         lambda p: Range(-amplitude_limit(p), amplitude_limit(p)),
         ("n", "mass", "length", "k", "d", "g"),
     )
