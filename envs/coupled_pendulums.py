@@ -22,11 +22,11 @@ th2)^2`` (s = 0.5 m, the pivot spacing). The sine terms are in the quartic Lagra
 spring's tilt off the horizontal, changes L only at O(d^2 a^4 / s) and the spring energy at O(k d^3 a^5 / s): a
 fifth-order term, negligible.
 
-Time scales: the timestep follows the fastest mode, omega_a (2 ms in the weak-coupling case, 1.96 ms at the defaults), and a run lasts 30.5 periods of
-the slowest excited mode, or 2.5 transfer times T_x = pi / (omega_a - omega_s) if both are excited. Two domains
-keep runs below ~1e6 steps: kappa <= 199.5 (omega_a / omega_s <= 20; a range of k that depends on m, g, l and
-d) and, where both modes are excited, kappa >= 2e-3 (T_x <= 250 carrier periods).
-"""
+Time scales: the timestep follows the fastest mode, omega_a (2 ms in the weak-coupling case, 1.96 ms at the
+defaults), and a run lasts 30.5 periods of the slowest excited mode, or 2.5 transfer times T_x = pi / (omega_a -
+omega_s) if both are excited. Two domains keep runs below ~1e6 steps: kappa <= 199.5 (omega_a / omega_s <= 20; a
+range of k that depends on m, g, l and d) and, where both modes are excited, kappa >= 2e-3 (T_x <= 250 carrier
+periods)."""
 
 from __future__ import annotations
 
@@ -45,7 +45,8 @@ from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.simulate import Trajectory
 
 _FREQ = (
-    "RK4 at dt = 6.30e-3 / omega_a (<= 2 ms in the default cases): relative frequency error (omega dt)^4/120 <~ 1.3e-11; "
+    "RK4 at dt = 6.30e-3 / omega_a (<= 2 ms in the default cases): relative frequency error (omega dt)^4/120 "
+    "<~ 1.3e-11; "
     "normal coordinates from the O7 mode vectors, crossings cubic-interpolated over >= 30 periods; a symmetric "
     "release is predicted exactly at any amplitude, a beats release is in the linear theory's regime (first-order "
     "amplitude shift <= 2.5e-7, module docstring)"

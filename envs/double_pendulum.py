@@ -18,11 +18,11 @@ keeps it at 1.2e-7, below the 1e-6 tolerance. The first-order amplitude shift of
 at every mass and length ratio: each case's regime bounds |amplitude1| so that it stays below a quarter of the
 frequency tolerance (and rod 2 starts hanging, at 0, in the two cases that release rod 1 alone).
 
-Time scales: the timestep follows the fast mode (2 ms in the unequal case, 1.76 ms at the defaults) and a run lasts 30.5 periods of the slowest
-excited mode; omega_fast / omega_slow <= 20 keeps runs below 3.3e5 steps. Its square r solves r + 2 + 1/r = (1 +
-m2/m1)(1 + l2/l1)^2 / (l2/l1) (O6's quartic), which bounds length2 to [length1 / 199, 199 length1] and mass2 to
-[1e-3 mass1, (402 lambda / (1 + lambda)^2 - 1) mass1], lambda = length2 / length1 (ranges that depend on the
-others).
+Time scales: the timestep follows the fast mode (2 ms in the unequal case, 1.76 ms at the defaults) and a run lasts
+30.5 periods of the slowest excited mode; omega_fast / omega_slow <= 20 keeps runs below 3.3e5 steps. Its square r
+solves r + 2 + 1/r = (1 + m2/m1)(1 + l2/l1)^2 / (l2/l1) (O6's quartic), which bounds length2 to [length1 / 199, 199
+length1] and mass2 to [1e-3 mass1, (402 lambda / (1 + lambda)^2 - 1) mass1], lambda = length2 / length1 (ranges
+that depend on the others).
 """
 
 from __future__ import annotations
@@ -42,7 +42,8 @@ from rigidbench.scenario import Case, Check, Derived, Scenario
 from rigidbench.simulate import Trajectory
 
 _FREQ = (
-    "RK4 at dt = 1.02e-2 / omega_fast (<= 2 ms in the default cases): relative frequency error (omega dt)^4/120 <~ 2e-10; "
+    "RK4 at dt = 1.02e-2 / omega_fast (<= 2 ms in the default cases): relative frequency error (omega dt)^4/120 "
+    "<~ 2e-10; "
     "normal coordinates from the O7 mode vectors, crossings cubic-interpolated over >= 30 periods; nonlinear shift "
     "of the fast mode -1.85 a1^2 (measured, exactly quadratic in a1, and the first-order amplitude shift; the slow "
     "mode's is ~20x smaller): 1.2e-7 at a1 = 0.25 mrad, <= 2.5e-7 in the case regimes"
