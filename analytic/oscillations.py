@@ -185,6 +185,15 @@ def coupled_frequencies(inertia_pivot: float, mgl: float, stiffness: float, heig
     return float(np.sqrt(ws2)), float(np.sqrt(ws2 + 2 * stiffness * height**2 / inertia_pivot))
 
 
+def coupled_modes(inertia_pivot: float, mgl: float, stiffness: float, height: float) -> NormalModes:
+    """Normal modes of the coupled pair with the shapes fixed by symmetry: (1, 1) and (1, -1) over sqrt(2 I_O)
+    ([T] O3). The same as `normal_modes` of `spring_chain_matrices` (2, ...), but exact however weak the coupling:
+    an eigensolver's vectors turn arbitrarily in the plane of two (numerically) equal frequencies."""
+    T, V = spring_chain_matrices(2, inertia_pivot, mgl, stiffness, height)
+    shapes = np.array([[1.0, 1.0], [1.0, -1.0]]) / np.sqrt(2 * inertia_pivot)
+    return NormalModes(np.array(coupled_frequencies(inertia_pivot, mgl, stiffness, height)), shapes, T, V)
+
+
 def chain_frequencies(n: int, inertia_pivot: float, mgl: float, stiffness: float, height: float) -> np.ndarray:
     """Mode frequencies (rad/s), ascending, of the free-ended chain: [T] O5.
 
@@ -193,6 +202,15 @@ def chain_frequencies(n: int, inertia_pivot: float, mgl: float, stiffness: float
     r = np.arange(n)
     kappa = stiffness * height**2 / inertia_pivot
     return np.sqrt(mgl / inertia_pivot + 4 * kappa * np.sin(r * np.pi / (2 * n)) ** 2)
+
+
+def chain_modes(n: int, inertia_pivot: float, mgl: float, stiffness: float, height: float) -> NormalModes:
+    """Normal modes of the free-ended chain with the O5 shapes (`chain_shapes`, normalised ``a^T T a = 1``) and the
+    O5 frequencies: exact however weak the coupling ([T] O5), where an eigensolver's vectors turn arbitrarily
+    among (numerically) equal frequencies."""
+    T, V = spring_chain_matrices(n, inertia_pivot, mgl, stiffness, height)
+    shapes = chain_shapes(n) / np.sqrt(inertia_pivot)
+    return NormalModes(chain_frequencies(n, inertia_pivot, mgl, stiffness, height), shapes, T, V)
 
 
 def chain_shapes(n: int) -> np.ndarray:
@@ -227,8 +245,9 @@ class Beats:
 
     @property
     def transfer_time(self) -> float:
-        """T_x = pi / (omega_a - omega_s) (s): all the energy is in pendulum 2 ([T] O4)."""
-        return np.pi / (self.omega_a - self.omega_s)
+        """T_x = pi / (omega_a - omega_s) (s): all the energy is in pendulum 2 ([T] O4); inf for uncoupled modes."""
+        split = self.omega_a - self.omega_s
+        return float(np.pi / split) if split > 0 else float("inf")
 
     def angles(self, t: np.ndarray) -> np.ndarray:
         """(th1, th2) (rad), shape (len(t), 2)."""
@@ -279,3 +298,131 @@ def double_pendulum_frequencies(mass1: float, mass2: float, length1: float, leng
     disc = np.sqrt(b * b - 4 * a * c)
     # The smaller root as 2c / (-b + disc): no cancellation when the modes are far apart.
     return np.sqrt(np.array([2 * c / (-b + disc), (-b + disc) / (2 * a)]))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Beyond the linear theory: the symmetric modes of the coupled pair exactly, and the first amplitude correction
+# ---------------------------------------------------------------------------------------------------------
+
+
+def anti_phase_period(inertia_pivot: float, mgl: float, stiffness: float, height: float, amplitude: float) -> float:
+    """Exact period (s) of the anti-phase motion th1 = -th2 of two identical pendulums joined by a spring at d
+    below the pivots, released from rest at ``th1 = amplitude`` (|amplitude| < pi/2).
+
+    By the mirror symmetry that swaps the pendulums, th1 = -th2 holds at all times. The attachment points then
+    stay level, so the spring stays horizontal and is stretched by exactly ``2 d sin th``: a one-degree-of-freedom
+    motion with kinetic energy ``I_O th'^2`` and potential ``V(th) = 2 M g h (1 - cos th) + 2 k d^2 sin^2 th``
+    ([T] O3 without the small-angle approximation). Its period, ``4 sqrt(I_O) int_0^a dth / sqrt(V(a) - V(th))``,
+    is computed with ``th = a sin(phi)`` (no end-point singularity) and ``V(a) - V(th) = 4 M g h sin((a + th)/2)
+    sin((a - th)/2) + 2 k d^2 sin(a + th) sin(a - th)`` (no cancellation); ``a - th = 2 a sin^2(pi/4 - phi/2)``.
+    With k = 0 (or d = 0) it is the elliptic period of O1; as a -> 0, ``2 pi / omega_a``.
+
+    Raises
+    ------
+    ValueError
+        If |amplitude| is not below pi/2 (beyond it the spring's stretch 2 d sin th decreases again).
+    """
+    from scipy import integrate
+
+    a = abs(float(amplitude))
+    if not a < np.pi / 2:
+        raise ValueError(f"amplitude = {amplitude!r} rad: the anti-phase period needs |amplitude| < pi/2")
+    if a == 0.0:
+        return float(2 * np.pi / coupled_frequencies(inertia_pivot, mgl, stiffness, height)[1])
+    kd2 = stiffness * height**2
+
+    def integrand(phi: float) -> float:
+        th = a * np.sin(phi)
+        diff = 2 * a * np.sin(np.pi / 4 - phi / 2) ** 2  # a - th, without cancellation
+        dv = 4 * mgl * np.sin((a + th) / 2) * np.sin(diff / 2) + 2 * kd2 * np.sin(a + th) * np.sin(diff)
+        return a * np.cos(phi) / np.sqrt(dv)
+
+    value, _ = integrate.quad(integrand, 0.0, np.pi / 2, epsabs=0.0, epsrel=1e-13, limit=200)
+    return float(4 * np.sqrt(inertia_pivot) * value)
+
+
+def spring_chain_quartic(mgl: float, stiffness: float, height: float):
+    """The quartic part L4(th, th') of the Lagrangian of identical pendulums in a row joined by springs ([T] O3, O5).
+
+    Gravity gives ``+ M g h th^4 / 24`` per pendulum (``- M g h (1 - cos th)`` to fourth order); a spring between
+    neighbours i, j stretched by ``d (sin th_i - sin th_j)`` (its tilt changes its length only at O(th^4 d^2/s),
+    the energy at fifth order) gives ``+ k d^2 (th_i - th_j)(th_i^3 - th_j^3) / 6``. Returns a function of angles
+    shaped (..., n) (rates unused) -> L4 shaped (...).
+    """
+
+    def quartic(th: np.ndarray, rate: np.ndarray) -> np.ndarray:
+        grav = mgl * (th**4).sum(-1) / 24
+        a, b = th[..., :-1], th[..., 1:]
+        spring = stiffness * height**2 * ((a - b) * (a**3 - b**3)).sum(-1) / 6
+        return grav + spring
+
+    return quartic
+
+
+def double_pendulum_quartic(mass1: float, mass2: float, length1: float, length2: float, g: float):
+    """The quartic part L4(th, th') of the double pendulum's Lagrangian in absolute angles ([T] O6; [W] prob. 12.4).
+
+    ``T = ... + m2 l1 l2 cos(th1 - th2) th1' th2'`` gives ``- m2 l1 l2 (th1 - th2)^2 th1' th2' / 2``; ``V = (m1 +
+    m2) g l1 (1 - cos th1) + m2 g l2 (1 - cos th2)`` gives ``+ ((m1 + m2) g l1 th1^4 + m2 g l2 th2^4) / 24``.
+    """
+
+    def quartic(th: np.ndarray, rate: np.ndarray) -> np.ndarray:
+        t1, t2, w1, w2 = th[..., 0], th[..., 1], rate[..., 0], rate[..., 1]
+        kinetic = -0.5 * mass2 * length1 * length2 * (t1 - t2) ** 2 * w1 * w2
+        return kinetic + ((mass1 + mass2) * g * length1 * t1**4 + mass2 * g * length2 * t2**4) / 24
+
+    return quartic
+
+
+def amplitude_shifts(modes: NormalModes, quartic, amplitudes: np.ndarray) -> np.ndarray:
+    """First-order relative frequency shifts ``(omega_r - Omega_r) / Omega_r`` of the normal modes oscillating with
+    modal amplitudes Q_r (``q_r = Q_r cos(Omega_r t + phi_r)``, mass-normalised modes of `modes`).
+
+    Whitham's averaged Lagrangian: with the quartic part L4 averaged over independent mode phases (no internal
+    resonance), ``<L4> = sum_r A_r Q_r^4 + sum_{r<s} B_rs Q_r^2 Q_s^2`` and ``d<L>/dQ_r = 0`` give ``omega_r^2 =
+    Omega_r^2 - 8 A_r Q_r^2 - 4 sum_s B_rs Q_s^2`` (Nayfeh & Mook, *Nonlinear Oscillations*, 1979, sections 4.1
+    and 6.2 for the single-mode and two-mode cases). A lone pendulum gives ``-a^2/16`` (O1's series). The
+    neglected terms are O(Q^4) and, near an internal resonance (omega_r ~ omega_s, 3 omega_s, ...), terms of
+    relative size (shift)^2 omega / (detuning). Used to state the linear theory's domain (the amplitudes at which
+    this leading correction stays below a check's tolerance).
+
+    Parameters
+    ----------
+    modes : NormalModes
+    quartic : callable
+        L4(th, th'), vectorised over leading axes (e.g. `spring_chain_quartic`).
+    amplitudes : array_like, shape (n,)
+        Q_r (the normal coordinates' amplitudes, e.g. ``modes.coordinates(angles0)`` for a release from rest).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Relative shift of each mode's frequency (0 for a mode not excited and not shifted by the others).
+    """
+    w = modes.frequencies
+    n = len(w)
+    q = np.asarray(amplitudes, dtype=float)
+    # Trigonometric polynomials of degree <= 4 per phase are averaged exactly on 8 equally spaced phases.
+    phi = 2 * np.pi * np.arange(8) / 8
+
+    def single(r: int) -> float:
+        th = np.cos(phi)[:, None] * modes.shapes[:, r]
+        rate = -w[r] * np.sin(phi)[:, None] * modes.shapes[:, r]
+        return float(quartic(th, rate).mean())
+
+    A = np.array([single(r) for r in range(n)])
+    f1, f2 = np.meshgrid(phi, phi, indexing="ij")
+    f1, f2 = f1.ravel(), f2.ravel()
+    shift2 = np.zeros(n)
+    excited = np.flatnonzero(q != 0)
+    for r in range(n):
+        total = 8 * A[r] * q[r] ** 2
+        for s in excited:
+            if s == r:
+                continue
+            th = np.cos(f1)[:, None] * modes.shapes[:, r] + np.cos(f2)[:, None] * modes.shapes[:, s]
+            rate = -(w[r] * np.sin(f1)[:, None] * modes.shapes[:, r] + w[s] * np.sin(f2)[:, None] * modes.shapes[:, s])
+            B = float(quartic(th, rate).mean()) - A[r] - A[s]
+            total += 4 * B * q[s] ** 2
+        shift2[r] = -total  # omega_r^2 - Omega_r^2
+    return np.sqrt(1 + shift2 / w**2) - 1

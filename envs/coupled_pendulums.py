@@ -4,19 +4,33 @@ Theory: THEORY.md O3 (normal modes, Wilcox Part II sections 12.1-12.3, eqs 12.10
 transfer, section 12.4) and O7 (the eigenproblem, eqs 12.15-12.26), implemented in
 `rigidbench.analytic.oscillations`. Model: ``models/coupled_pendulums.xml``.
 
-Amplitude: the theory is linear. 1 mrad keeps the nonlinear frequency shifts well inside the tolerances: the
-in-phase mode never stretches the spring and is exactly a lone pendulum, shifted by -a^2/16 = -6e-8 (O1); the
-anti-phase mode (th1 = -th2 = th) stretches the spring by 2 d sin(th), so its potential is ``(m g l + 2 k d^2)
-th^2 - (m g l / 12 + 2 k d^2 / 3) th^4``, and Lindstedt's method gives ``d(omega_a)/omega_a = -(3/8) a^2 (m g l/6
-+ 4 k d^2/3) / (m g l + 2 k d^2)``: -2.8e-7 at a = 1 mrad in the strong-coupling case (k = 20 N/m), smaller in
-the others. The spring is not exactly linear in the angles: its length is
-``L^2 = (s + d (sin th1 - sin th2))^2 + d^2 (cos th1 - cos th2)^2`` (s = 0.5 m, the pivot spacing). The sine
-terms are the th^3 corrections above; the second term, the spring's tilt off the horizontal, changes L only at
-O(d^2 a^4 / s) and the spring energy at O(k d^3 a^5 / s), a frequency shift of order a^3 d / s ~ 1e-9: negligible.
-"""
+Amplitude. Released in one of the two symmetric shapes, the pair is a one-degree-of-freedom system at any
+amplitude, and the checks use its exact period: th1 = th2 never stretches the spring (a lone pendulum, O1's
+elliptic period with l = I_O/(M h)); th1 = -th2 keeps the attachment points level, so the spring stays horizontal,
+stretched by exactly 2 d sin th (`rigidbench.analytic.oscillations.anti_phase_period`). Those two cases accept
+any amplitude up to 1 rad.
+
+Released otherwise (the beats cases), both modes are excited and the theory is linear: the modes exchange energy
+through the quartic terms of the Lagrangian, and each frequency is shifted by ``delta_r a^2``
+(`rigidbench.analytic.oscillations.amplitude_shifts`, the averaged Lagrangian): in phase ``-(3/4 + 2 kappa)
+a^2/16``, anti-phase ``-(3/4 + 4 kappa) a^2 / (16 + 32 kappa)``, kappa = k d^2 / (m g l) (5.0e-8 and 5.1e-8 at the
+default 1 mrad, as measured). The beats cases' regime bounds |amplitude1| so that this neglected shift stays
+below a quarter of the frequency tolerance, its phase error over the run (shift x omega x duration) below a
+quarter of the waveform's, and its change of omega_a - omega_s below a quarter of the transfer time's. The spring
+is not exactly linear in the angles: its length is ``L^2 = (s + d (sin th1 - sin th2))^2 + d^2 (cos th1 - cos
+th2)^2`` (s = 0.5 m, the pivot spacing). The sine terms are in the quartic Lagrangian; the second term, the
+spring's tilt off the horizontal, changes L only at O(d^2 a^4 / s) and the spring energy at O(k d^3 a^5 / s): a
+fifth-order term, negligible.
+
+Time scales: the timestep follows the fastest mode, omega_a (2 ms in the weak-coupling case, 1.96 ms at the
+defaults), and a run lasts 30.5 periods of the slowest excited mode, or 2.5 transfer times T_x = pi / (omega_a -
+omega_s) if both are excited. Two domains keep runs below ~1e6 steps: kappa <= 199.5 (omega_a / omega_s <= 20; a
+range of k that depends on m, g, l and d) and, where both modes are excited, kappa >= 2e-3 (T_x <= 250 carrier
+periods)."""
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from typing import Any
 
@@ -26,32 +40,43 @@ import numpy as np
 from rigidbench.analytic import oscillations as osc
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, PendulumEnv, RodLength, SpringHeight, SpringStiffness
-from rigidbench.params import Gravity, Numeric, Param, Range, positive
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.params import Bound, Gravity, Numeric, Param, Range
+from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.simulate import Trajectory
 
 _FREQ = (
-    "RK4 at dt = 2 ms: relative frequency error (omega dt)^4/120 <~ 5e-11; normal coordinates from the O7 mode "
-    "vectors, crossings cubic-interpolated over >= 30 periods; nonlinear shift <= (3/8) a^2 (m g l/6 + 4 k d^2/3)/"
-    "(m g l + 2 k d^2) = 2.8e-7 at a = 1 mrad (module docstring)"
-)
+    "RK4 at dt = 6.30e-3 / omega_a (<= 2 ms in the default cases): relative frequency error (omega dt)^4/120 "
+    "<~ 1.3e-11; "
+    "normal coordinates from the O7 mode vectors, crossings cubic-interpolated over >= 30 periods; a symmetric "
+    "release is predicted exactly at any amplitude, a beats release is in the linear theory's regime (first-order "
+    "amplitude shift <= 2.5e-7, module docstring)"
+) + pendulums.ROUNDOFF.format(factor="0.5", measured="1e-3 .. 0.04 rho")
 _SHAPE = (
     "least-squares fit of th1, th2 at the two measured frequencies over the record; nonlinear terms O(a^2) ~ 1e-6 "
     "of the amplitude leak into the fit, 1e-5 leaves a decade"
 )
 _WAVE = (
-    "the linear solution's phase error grows as the nonlinear shift (<~ 1e-7 at 1 mrad, module docstring) times "
-    "omega t (<~ 1.3e3 rad over 2.5 T_x in the weak case): <~ 1.3e-4 of the amplitude; RK4 adds ~1e-9"
-)
+    "the linear solution's phase error grows as the first-order amplitude shift times omega t; the regime of the "
+    "beats cases keeps it <= 7.5e-5 of the amplitude over the run (5e-5 in the weak-coupling case at 1 mrad); RK4 "
+    "adds ~1e-9"
+) + pendulums.ROUNDOFF.format(factor="0.5 omega_a t_run x", measured="0.6 rho omega_a t_run")
 CHECKS = (
-    Check("omega-in-phase", "rad/s", 1e-6, "rel", _FREQ, "O3: omega_s^2 = M g l / I_O (= g/l for a point bob)"),
+    Check(
+        "omega-in-phase",
+        "rad/s",
+        1e-6,
+        "rel",
+        _FREQ,
+        "O3: omega_s^2 = M g l / I_O (= g/l for a point bob); released in phase, O1's exact 2 pi / T(a)",
+    ),
     Check(
         "omega-anti-phase",
         "rad/s",
         1e-6,
         "rel",
         _FREQ,
-        "O3: omega_a^2 = omega_s^2 + 2 k d^2 / I_O (Wilcox eqs 12.10-12.24)",
+        "O3: omega_a^2 = omega_s^2 + 2 k d^2 / I_O (Wilcox eqs 12.10-12.24); released in anti-phase, the exact "
+        "period of V = 2 M g l (1 - cos th) + 2 k d^2 sin^2 th",
     ),
     Check("shape-in-phase", "1", 1e-5, "abs", _SHAPE, "O3/O7: th2/th1 = +1 in the in-phase mode"),
     Check("shape-anti-phase", "1", 1e-5, "abs", _SHAPE, "O3/O7: th2/th1 = -1 in the anti-phase mode"),
@@ -61,8 +86,11 @@ CHECKS = (
         1e-4,
         "rel",
         "vertex of a parabola through the peaks of |th2| within 2 % of the envelope maximum: applied to the exact "
-        "O4 signal it errs by <= 7e-6 for omega_b/omega0 <= 0.03 (tests); the nonlinear shift moves omega_a - "
-        "omega_s by <~ 1e-5 of itself",
+        "O4 signal it errs by <= 2.8e-5 for kappa in the beats' regime [2e-3, 0.1] (tests); the case regime keeps "
+        "the first-order amplitude shift's change of omega_a - omega_s below 2.5e-5 of itself"
+        + pendulums.ROUNDOFF.format(
+            factor="0.5 omega_a / (omega_a - omega_s) x", measured="0.04 rho omega_a / (omega_a - omega_s)"
+        ),
         "O4: T_x = pi / (omega_a - omega_s), when all the energy is in pendulum 2 (Wilcox section 12.4)",
     ),
     Check(
@@ -78,7 +106,7 @@ CHECKS = (
         "1",
         1e-8,
         "abs",
-        pendulums.SPRING_CHAIN_ENERGY_REASON,
+        pendulums.SPRING_CHAIN_ENERGY_REASON + pendulums.ROUNDOFF.format(factor="50", measured="4 .. 5.4 rho"),
         "O3: " + pendulums.SPRING_CHAIN_ENERGY,
     ),
 )
@@ -95,6 +123,79 @@ _STRONG = tuple(c for c in _BEATS if c != "transfer-time")  # too few carrier pe
 _MODES = ("in-phase", "anti-phase")
 
 
+# Domains of kappa = k d^2 / (m g l) (module docstring): omega_a / omega_s = sqrt(1 + 2 kappa) <= 20; both modes
+# excited: T_x ~ pi / (kappa omega_s) <= 250 carrier periods; a transfer time resolved by the envelope's peaks:
+# kappa <= 0.1 (omega_b / omega0 <= 0.0455), where the estimator errs by <= 2.8e-5 on the exact O4 signal (tests).
+KAPPA_MAX = (20.0**2 - 1) / 2
+KAPPA_MIN = 2e-3
+KAPPA_BEATS = (KAPPA_MIN, 0.1)
+# The first-order amplitude shift may take this fraction of a check's tolerance (the rest is the integrator's).
+SHIFT_SHARE = 0.25
+_BEATS_REGIME = (
+    "O4's beats: kappa = k d^2 / (m g l) in [2e-3, 0.1]: the transfer time is resolved by the envelope's peaks "
+    "(omega_b / omega0 <= 0.0455) and reached within 2.5 T_x <= 625 carrier periods; the linear theory's amplitudes: "
+    "|amplitude1| <= a_max, where the first-order amplitude shift of the modes (averaged quartic Lagrangian) stays "
+    "below a quarter of the frequency (1e-6), waveform (3e-4 over the run) and transfer-time (1e-4) tolerances; "
+    "pendulum 2 starts at rest at 0; the springs' attachment points stay s/10 apart"
+)
+_STRONG_REGIME = (
+    "both modes excited: kappa = k d^2 / (m g l) in [2e-3, 199.5] (2.5 T_x <= 625 carrier periods; omega_a / omega_s "
+    "<= 20); the linear theory's amplitudes: |amplitude1| <= a_max, where the first-order amplitude shift of the "
+    "modes stays below a quarter of the frequency (1e-6) and waveform (3e-4 over the run) tolerances; pendulum 2 "
+    "starts at rest at 0; the springs' attachment points stay s/10 apart"
+)
+
+
+def _kappa_range(low: float, high: float, why: str) -> Bound:
+    def bound(p: Mapping[str, Any]) -> Range:
+        scale = p["mass"] * p["g"] * p["length"] / p["d"] ** 2
+        return Range(low * scale, high * scale, low_open=low == 0.0)
+
+    return Bound(
+        f"{'(0' if low == 0 else f'[{low:g}'}, {high:g}] m g l / d^2 ({why})", bound, ("mass", "length", "d", "g")
+    )
+
+
+def _omegas(p: Mapping[str, Any]) -> tuple[float, float]:
+    """(omega_s, omega_a) (rad/s) from the requested parameters (point bobs, I_O = m l^2 + the bob's 1e-9 kg m^2)."""
+    inertia = p["mass"] * p["length"] ** 2 + 1e-9
+    return osc.coupled_frequencies(inertia, p["mass"] * p["g"] * p["length"], p["k"], p["d"])
+
+
+def amplitude_limit(p: Mapping[str, Any]) -> float:
+    """Largest |amplitude1| (rad), pendulum 2 released at rest at 0, at which the linear theory's neglected first-order
+    amplitude shift stays below `SHIFT_SHARE` of the frequency, waveform and transfer-time tolerances."""
+    inertia = p["mass"] * p["length"] ** 2 + 1e-9
+    mgl = p["mass"] * p["g"] * p["length"]
+    modes = osc.coupled_modes(inertia, mgl, p["k"], p["d"])
+    a = 1e-3
+    shift = osc.amplitude_shifts(modes, osc.spring_chain_quartic(mgl, p["k"], p["d"]), modes.coordinates([a, 0.0]))
+    per_a2 = np.abs(shift) / a**2  # relative shift of each mode per rad^2
+    omega_s, omega_a = modes.frequencies
+    duration = max(30.5 * 2 * np.pi / omega_s, 2.5 * np.pi / (omega_a - omega_s))
+    tol = {c.name: c.tolerance for c in CHECKS}
+    limits = [
+        pendulums.spring_collapse_limit(p["d"]) ** 2,
+        SHIFT_SHARE * tol["omega-in-phase"] / per_a2.max(),
+        SHIFT_SHARE * tol["beat-waveform"] / ((per_a2 * modes.frequencies).max() * duration),
+        SHIFT_SHARE * tol["transfer-time"] * (omega_a - omega_s) / abs(np.diff(shift / a**2 * modes.frequencies)[0]),
+    ]
+    return float(np.sqrt(min(limits)))
+
+
+def _beats_regime(kappa: tuple[float, float]) -> dict[str, Range | Bound]:
+    amplitude = Bound(
+        "[-a_max, a_max], a_max(mass, length, k, d, g) from the first-order amplitude shift (case regime)",
+        lambda p: Range(-amplitude_limit(p), amplitude_limit(p)),
+        ("mass", "length", "k", "d", "g"),
+    )
+    return {
+        "k": _kappa_range(*kappa, "case regime"),
+        "amplitude1": amplitude,
+        "amplitude2": Range(0.0, 0.0),
+    }
+
+
 class CoupledPendulums(Scenario):
     """Two identical pendulums and a spring at d below the pivots: normal modes, beats, energy transfer
     (THEORY.md O3, O4, O7)."""
@@ -102,69 +203,97 @@ class CoupledPendulums(Scenario):
     slug = "coupled-pendulums"
     title = "Two identical pendulums coupled by a spring (normal modes and beats)"
     env_id = "rigidbench/CoupledPendulums-v0"
+    # Bounds: 1 g to 1 t, 1 mm to 100 m, microgravity to 100 g. The spring matters through kappa = k d^2 / (m g l),
+    # so k's own range is wide and its dependent range bounds kappa (run length: module docstring).
     params = (
-        Param("mass", "kg", "mass m of each point bob", positive(1e3), BobMass()),
-        Param("length", "m", "distance l from each pivot to its bob", positive(100.0), RodLength()),
+        Param("mass", "kg", "mass m of each point bob", Range(1e-3, 1e3), BobMass()),
+        Param("length", "m", "distance l from each pivot to its bob", Range(1e-3, 100.0), RodLength()),
         Param(
             "k",
             "N/m",
             "stiffness of the coupling spring (linear, relaxed at equilibrium)",
-            positive(1e4),
+            Range(1e-15, 1e15),
             SpringStiffness(),
+            within=_kappa_range(0.0, KAPPA_MAX, "omega_a / omega_s <= 20: 30 slow periods stay below 6e5 steps"),
         ),
         Param(
             "d",
             "m",
-            "distance below the pivots at which the spring is attached, 0 < d <= length",
-            positive(100.0),
+            "distance below the pivots at which the spring is attached, on the rod between pivot and bob",
+            Range(1e-6, 100.0),
             SpringHeight(),
+            within=Bound("[1e-3 length, length]", lambda p: Range(1e-3 * p["length"], p["length"]), ("length",)),
         ),
         Param("amplitude1", "rad", "release angle of pendulum 1 (at rest)", Range(-1.0, 1.0), Numeric("amplitude1")),
         Param("amplitude2", "rad", "release angle of pendulum 2 (at rest)", Range(-1.0, 1.0), Numeric("amplitude2")),
-        Param("g", "m/s^2", "gravitational acceleration (along -z)", positive(1e3), Gravity()),
+        Param("g", "m/s^2", "gravitational acceleration (along -z)", Range(1e-6, 1e3), Gravity()),
     )
     cases = (
         Case(
             "in-phase",
-            "both released at the same angle: the in-phase mode alone",
+            "both released at the same angle: the in-phase mode alone, a lone pendulum at any amplitude",
             {"amplitude2": lambda p: p["amplitude1"]},
             ("omega-in-phase", "shape-in-phase", "energy-drift"),
         ),
         Case(
             "anti-phase",
-            "released at opposite angles: the anti-phase mode alone",
+            "released at opposite angles: the anti-phase mode alone, exact at any amplitude",
             {"amplitude2": lambda p: -p["amplitude1"]},
             ("omega-anti-phase", "shape-anti-phase", "energy-drift"),
+            ranges={
+                "amplitude1": Bound(
+                    "[-a_c, a_c], 2 d sin(a_c) = 0.9 s",
+                    lambda p: Range(-pendulums.spring_collapse_limit(p["d"]), pendulums.spring_collapse_limit(p["d"])),
+                    ("d",),
+                )
+            },
+            regime="the attachment points, s = 0.5 m apart, swing towards each other by 2 d sin(a): they stay at least "
+            "s/10 apart (at 2 d sin(a) = s they meet and the spring's stretch is no longer 2 d sin th)",
         ),
         Case(
             "beats",
             "pendulum 1 released, pendulum 2 at rest: beats (k d^2 / m g l = 0.025)",
             {"amplitude2": 0.0},
             _BEATS,
+            ranges=_beats_regime(KAPPA_BEATS),
+            regime=_BEATS_REGIME,
         ),
         Case(
             "weak-coupling",
             "beats with k = 0.25 N/m (k d^2 / m g l = 0.0064): slow, complete energy transfer",
             {"amplitude2": 0.0, "k": 0.25},
             _BEATS,
+            ranges=_beats_regime(KAPPA_BEATS),
+            regime=_BEATS_REGIME,
         ),
         Case(
             "strong-coupling",
             "pendulum 1 released with k = 20 N/m (k d^2 / m g l = 0.5): omega_a = 1.42 omega_s",
             {"amplitude2": 0.0, "k": 20.0},
             _STRONG,
+            ranges=_beats_regime((KAPPA_MIN, KAPPA_MAX)),
+            regime=_STRONG_REGIME,
         ),
     )
     checks = CHECKS
+    domains = (
+        Domain(
+            "double-precision",
+            "O3/O4 measured in MuJoCo",
+            pendulums.ROUNDOFF_DOMAIN_TEXT,
+            lambda p: pendulums.roundoff_outside(
+                p, pendulums.PIVOT_SPACING / 2, max(abs(float(p["amplitude1"])), abs(float(p["amplitude2"])))
+            ),
+        ),
+    )
 
     def validate(self, params: Mapping[str, Any]) -> None:
-        if params["d"] > params["length"]:
-            raise ValueError(
-                f"parameter 'd' = {params['d']:g} m is outside the valid range (0, length = {params['length']:g}] m: "
-                "the spring is attached to the rod, between the pivot and the bob"
-            )
         if params["amplitude1"] == 0 and params["amplitude2"] == 0:
             raise ValueError("parameters 'amplitude1' and 'amplitude2' are both 0: nothing moves (valid: not both 0)")
+
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        """The timestep follows the faster mode, omega_a (2 ms at the model's defaults)."""
+        return {"timestep": pendulums.timestep_for(_omegas(params)[1], _rate0(type(self)), "omega_a")}
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         data.qpos[:] = [params["amplitude1"], params["amplitude2"]]
@@ -176,11 +305,17 @@ class CoupledPendulums(Scenario):
         g = pendulums.gravity(model)
         mgl = p1.mass * g * p1.length
         k = float(sp.stiffness[0])
-        modes = osc.normal_modes(*osc.spring_chain_matrices(2, p1.inertia_pivot, mgl, k, sp.height))
+        modes = osc.coupled_modes(p1.inertia_pivot, mgl, k, sp.height)
         omega_s, omega_a = osc.coupled_frequencies(p1.inertia_pivot, mgl, k, sp.height)
         angles0 = data.qpos.copy()
         beats = osc.Beats(float(angles0[0]), omega_s, omega_a)
         excited = np.abs(modes.coordinates(angles0)) > 1e-9 * np.abs(angles0).max()
+        # A symmetric release is a one-degree-of-freedom motion: its exact frequency at any amplitude.
+        amplitude = abs(float(angles0[0]))
+        if angles0[0] == angles0[1]:  # th1 = th2: a lone pendulum of length I_O / (M h) (O1, O2)
+            omega_s = 2 * np.pi / osc.pendulum_period(p1.inertia_pivot * g / mgl, g, amplitude)
+        elif angles0[0] == -angles0[1]:  # th1 = -th2: the spring stays level (anti_phase_period)
+            omega_a = 2 * np.pi / osc.anti_phase_period(p1.inertia_pivot, mgl, k, sp.height, amplitude)
         periods = 2 * np.pi / np.array([omega_s, omega_a])
         duration = 30.5 * periods[excited].max()
         if excited.all():
@@ -194,6 +329,7 @@ class CoupledPendulums(Scenario):
             "_duration": duration,
             "_scale": float(np.abs(angles0).max()),
             "_energy_scale": float(pendulums.row_energy(model, angles0[None], np.zeros((1, 2)))[0]),
+            "_tolerance": _roundoff_tolerances(model, angles0, omega_a, omega_a - omega_s, duration),
             "omega-in-phase": omega_s,
             "omega-anti-phase": omega_a,
             "shape-in-phase": float(ratios[0]),
@@ -232,6 +368,28 @@ class CoupledPendulums(Scenario):
                 pendulums.row_energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]
             ),
         }
+
+
+@functools.cache
+def _rate0(cls: type[CoupledPendulums]) -> float:
+    return pendulums.default_rate(cls(), lambda p: _omegas(p)[1])
+
+
+def _roundoff_tolerances(
+    model: mujoco.MjModel, angles0: np.ndarray, omega_a: float, split: float, duration: float
+) -> dict[str, float]:
+    """Each check's tolerance, or its double-precision floor if larger (`pendulums.ROUNDOFF`)."""
+    rho = pendulums.roundoff(model, float(np.abs(angles0).max()))
+    floor = {
+        "omega-in-phase": 0.5 * rho,
+        "omega-anti-phase": 0.5 * rho,
+        "shape-in-phase": 3 * rho,
+        "shape-anti-phase": 3 * rho,
+        "transfer-time": 0.5 * rho * omega_a / split if split > 0 else np.inf,
+        "beat-waveform": 0.5 * rho * omega_a * duration,
+        "energy-drift": 50 * rho,
+    }
+    return {c.name: max(c.tolerance, floor[c.name]) for c in CHECKS}
 
 
 def transfer_time(t: np.ndarray, angle2: np.ndarray, rate2: np.ndarray, *, before: float = np.inf) -> float:
@@ -306,8 +464,8 @@ class CoupledPendulumsEnv(PendulumEnv):
 
     Arguments
         ``case`` (in-phase, anti-phase, beats, weak-coupling, strong-coupling), ``params`` (mass, length, k, d,
-        amplitude1, amplitude2, g), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e.
-        10 ms), ``render_mode``.
+        amplitude1, amplitude2, g), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10: ten
+        derived steps, 19.6 ms at the defaults), ``render_mode``.
 
     Version History
         v0: initial version.

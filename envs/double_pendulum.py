@@ -13,11 +13,21 @@ the masses, lengths and bob inertias read back from the compiled model; O6's qua
 Amplitude: the theory is linear. The fast mode bends the rods against each other (th2 - th1 = -2.4 th1 at equal
 masses and lengths) and its nonlinear frequency shift is -1.85 (a1/rad)^2, measured and exactly quadratic in
 a1 (1.85e-6, 4.6e-7, 1.2e-7 at 1, 0.5, 0.25 mrad), 30 times a lone pendulum's a^2/16: the default 0.25 mrad
-keeps it at 1.2e-7, below the 1e-6 tolerance.
+keeps it at 1.2e-7, below the 1e-6 tolerance. The first-order amplitude shift of the averaged quartic Lagrangian
+(`rigidbench.analytic.oscillations.double_pendulum_quartic`, `amplitude_shifts`) gives the same -1.853 a1^2, and
+at every mass and length ratio: each case's regime bounds |amplitude1| so that it stays below a quarter of the
+frequency tolerance (and rod 2 starts hanging, at 0, in the two cases that release rod 1 alone).
+
+Time scales: the timestep follows the fast mode (2 ms in the unequal case, 1.76 ms at the defaults) and a run lasts
+30.5 periods of the slowest excited mode; omega_fast / omega_slow <= 20 keeps runs below 3.3e5 steps. Its square r
+solves r + 2 + 1/r = (1 + m2/m1)(1 + l2/l1)^2 / (l2/l1) (O6's quartic), which bounds length2 to [length1 / 199, 199
+length1] and mass2 to [1e-3 mass1, (402 lambda / (1 + lambda)^2 - 1) mass1], lambda = length2 / length1 (ranges
+that depend on the others).
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from typing import Any
 
@@ -27,19 +37,26 @@ import numpy as np
 from rigidbench.analytic import oscillations as osc
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, PendulumEnv, RodLength
-from rigidbench.params import Gravity, Numeric, Param, Range, positive
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.params import Bound, Gravity, Numeric, Param, Range
+from rigidbench.scenario import Case, Check, Derived, Scenario
 from rigidbench.simulate import Trajectory
 
 _FREQ = (
-    "RK4 at dt = 2 ms: relative frequency error (omega dt)^4/120 <~ 2e-10; normal coordinates from the O7 mode "
-    "vectors, crossings cubic-interpolated over >= 30 periods; nonlinear shift of the fast mode -1.85 a1^2 "
-    "(measured, exactly quadratic in a1; the slow mode's is ~20x smaller): 1.2e-7 at a1 = 0.25 mrad"
+    "RK4 at dt = 1.02e-2 / omega_fast (<= 2 ms in the default cases): relative frequency error (omega dt)^4/120 "
+    "<~ 2e-10; "
+    "normal coordinates from the O7 mode vectors, crossings cubic-interpolated over >= 30 periods; nonlinear shift "
+    "of the fast mode -1.85 a1^2 (measured, exactly quadratic in a1, and the first-order amplitude shift; the slow "
+    "mode's is ~20x smaller): 1.2e-7 at a1 = 0.25 mrad, <= 2.5e-7 in the case regimes"
 )
 _SHAPE = (
     "least-squares fit of th1, th2 at the measured frequencies over the record; nonlinear terms O(a^2) ~ 1e-6 of "
-    "the amplitude leak into the fit, 1e-5 leaves a decade"
+    "the amplitude leak into the fit, 1e-5 leaves a decade. The ratio r = th2/th1 = tan(psi) of the mode's "
+    "direction psi amplifies an error in psi by dr/dpsi = 1 + r^2: the tolerance is 1e-5 (1 + r^2) / (1 + 4.4955^2) "
+    "where |r| exceeds 4.4955, the largest ratio of the default cases (unequal's fast mode), and 1e-5 otherwise"
 )
+# The largest |th2/th1| of the default cases (unequal: m2 = 0.3 kg, l2 = 0.6 m, fast mode): the shape tolerance's
+# reference (see _SHAPE).
+SHAPE_RATIO_REF = 4.4955
 CHECKS = (
     Check("omega-slow", "rad/s", 1e-6, "rel", _FREQ, "O6/O7: slow root of det(V - w^2 T) = 0; (g/l)(2 - sqrt 2)"),
     Check("omega-fast", "rad/s", 1e-6, "rel", _FREQ, "O6/O7: fast root of det(V - w^2 T) = 0; (g/l)(2 + sqrt 2)"),
@@ -64,17 +81,96 @@ def _mode_ratio(p: Mapping[str, Any], mode: int) -> float:
     return float(modes.shape_ratios()[1, mode])
 
 
+# omega_fast / omega_slow <= 20: r = 400 and S = r + 2 + 1/r = (1 + mu)(1 + lambda)^2 / lambda <= 402.0025 (O6's
+# quartic, mu = m2/m1, lambda = l2/l1). Half of S bounds lambda (so that mu may reach 1 at its ends), the rest mu.
+RATIO_MAX = 20.0
+_S_MAX = RATIO_MAX**2 + 2 + RATIO_MAX**-2
+LENGTH_RATIO = float((_S_MAX / 2 - 2 + np.sqrt((_S_MAX / 2 - 2) ** 2 - 4)) / 2)  # root of (1 + x)^2 / x = S/2
+MASS_RATIO_MIN = 1e-3
+SHIFT_SHARE = 0.25  # the neglected first-order amplitude shift may take this fraction of the 1e-6 tolerance
+_REGIME = (
+    "the linear theory's amplitudes (O6/O7): |amplitude1| <= a_max, where the first-order amplitude shift of the "
+    "excited modes (averaged quartic Lagrangian) stays below a quarter of the frequency tolerance (1e-6), and the "
+    "energy it moves between the modes (shift x omega_fast / (omega_fast - omega_slow)) below a quarter of the "
+    "shapes' (1e-5 / 3 rad in the mode's direction)"
+)
+
+
+def _mass_ratio_max(p: Mapping[str, Any]) -> float:
+    lam = p["length2"] / p["length1"]
+    return float(_S_MAX * lam / (1 + lam) ** 2 - 1)
+
+
+def amplitude_limit(p: Mapping[str, Any], mode: int | None) -> float:
+    """Largest |amplitude1| (rad) of the linear theory's regime: released in mode `mode`'s shape (0 slow, 1 fast), or
+    with rod 2 hanging (None); the first-order amplitude shift below `SHIFT_SHARE` of the 1e-6 tolerance."""
+    m1, m2, l1, l2, g = (float(p[x]) for x in ("mass1", "mass2", "length1", "length2", "g"))
+    modes = osc.normal_modes(*osc.double_pendulum_matrices(m1, m2, l1, l2, g, 1e-9, 1e-9))
+    a = 1e-4
+    angles = np.array([a, 0.0]) if mode is None else np.array([a, a * modes.shape_ratios()[1, mode]])
+    q = modes.coordinates(angles)
+    shift = np.abs(osc.amplitude_shifts(modes, osc.double_pendulum_quartic(m1, m2, l1, l2, g), q))
+    excited = np.abs(q) > 1e-6 * np.abs(q).max()
+    per_a2 = shift[excited].max() / a**2
+    w = modes.frequencies
+    limits = [
+        SHIFT_SHARE * 1e-6 / per_a2,
+        # the energy the shift moves between the modes, ~ shift x omega / (omega_fast - omega_slow), as a direction
+        # error of the fitted shapes: a quarter of the 1e-5 / 3 rad the shape tolerance allows at equal masses
+        SHIFT_SHARE * 1e-5 / 3 * (w[1] - w[0]) / (per_a2 * w[1]),
+    ]
+    return float(min(1.0, np.sqrt(min(limits))))
+
+
+def _amplitude_regime(mode: int | None) -> Bound:
+    return Bound(
+        "[-a_max, a_max], a_max(mass1, mass2, length1, length2, g) from the first-order amplitude shift (case regime)",
+        lambda p: Range(-amplitude_limit(p, mode), amplitude_limit(p, mode)),
+        ("mass1", "mass2", "length1", "length2", "g"),
+    )
+
+
+def _omega_fast(p: Mapping[str, Any]) -> float:
+    """The fast mode's frequency (rad/s) from the requested parameters (point bobs, O6)."""
+    return float(osc.double_pendulum_frequencies(p["mass1"], p["mass2"], p["length1"], p["length2"], p["g"])[1])
+
+
 class DoublePendulum(Scenario):
     """A double pendulum oscillating about its lower equilibrium: its two normal modes (THEORY.md O6, O7)."""
 
     slug = "double-pendulum"
     title = "Double pendulum: small-oscillation normal modes"
     env_id = "rigidbench/DoublePendulum-v0"
+    # Bounds: 1 g to 1 t, 1 mm to 100 m, microgravity to 100 g; the ratios m2/m1 and l2/l1 within the ranges
+    # that keep omega_fast / omega_slow <= 20 (module docstring).
     params = (
-        Param("mass1", "kg", "mass of the upper point bob", positive(1e3), BobMass(("pendulum1",))),
-        Param("mass2", "kg", "mass of the lower point bob", positive(1e3), BobMass(("pendulum2",))),
-        Param("length1", "m", "pivot to upper bob", positive(100.0), RodLength(("pendulum1",))),
-        Param("length2", "m", "upper bob to lower bob", positive(100.0), RodLength(("pendulum2",))),
+        Param("mass1", "kg", "mass of the upper point bob", Range(1e-3, 1e3), BobMass(("pendulum1",))),
+        Param(
+            "mass2",
+            "kg",
+            "mass of the lower point bob",
+            Range(1e-3, 1e3),
+            BobMass(("pendulum2",)),
+            within=Bound(
+                "[1e-3 mass1, (402 lambda / (1 + lambda)^2 - 1) mass1], lambda = length2/length1 (omega_fast / "
+                "omega_slow <= 20)",
+                lambda p: Range(MASS_RATIO_MIN * p["mass1"], _mass_ratio_max(p) * p["mass1"]),
+                ("mass1", "length1", "length2"),
+            ),
+        ),
+        Param("length1", "m", "pivot to upper bob", Range(1e-3, 100.0), RodLength(("pendulum1",))),
+        Param(
+            "length2",
+            "m",
+            "upper bob to lower bob",
+            Range(1e-3, 100.0),
+            RodLength(("pendulum2",)),
+            within=Bound(
+                f"[length1 / {LENGTH_RATIO:.0f}, {LENGTH_RATIO:.0f} length1] (omega_fast / omega_slow <= 20)",
+                lambda p: Range(p["length1"] / LENGTH_RATIO, LENGTH_RATIO * p["length1"]),
+                ("length1",),
+            ),
+        ),
         Param("amplitude1", "rad", "release angle of rod 1 from the vertical", Range(-1.0, 1.0), Numeric("amplitude1")),
         Param(
             "amplitude2",
@@ -83,7 +179,7 @@ class DoublePendulum(Scenario):
             Range(-1.0, 1.0),
             Numeric("amplitude2"),
         ),
-        Param("g", "m/s^2", "gravitational acceleration (along -z)", positive(1e3), Gravity()),
+        Param("g", "m/s^2", "gravitational acceleration (along -z)", Range(1e-6, 1e3), Gravity()),
     )
     cases = (
         Case(
@@ -91,22 +187,39 @@ class DoublePendulum(Scenario):
             "released in the slow mode's shape (th2/th1 = +sqrt 2 for equal masses and lengths)",
             {"amplitude2": lambda p: _mode_ratio(p, 0) * p["amplitude1"]},
             ("omega-slow", "shape-slow", "energy-drift"),
+            ranges={"amplitude1": _amplitude_regime(0)},
+            regime=_REGIME,
         ),
         Case(
             "fast-mode",
             "released in the fast mode's shape (th2/th1 = -sqrt 2 for equal masses and lengths)",
             {"amplitude2": lambda p: _mode_ratio(p, 1) * p["amplitude1"]},
             ("omega-fast", "shape-fast", "energy-drift"),
+            ranges={"amplitude1": _amplitude_regime(1)},
+            regime=_REGIME,
         ),
-        Case("released", "rod 1 displaced, rod 2 hanging: both modes", {"amplitude2": 0.0}, _BOTH),
+        Case(
+            "released",
+            "rod 1 displaced, rod 2 hanging: both modes",
+            {"amplitude2": 0.0},
+            _BOTH,
+            ranges={"amplitude1": _amplitude_regime(None), "amplitude2": Range(0.0, 0.0)},
+            regime=_REGIME + "; rod 2 starts hanging (amplitude2 = 0)",
+        ),
         Case(
             "unequal",
             "light short lower pendulum (m2 = 0.3 kg, l2 = 0.6 m), rod 1 displaced: the general O6 quartic",
             {"amplitude2": 0.0, "mass2": 0.3, "length2": 0.6},
             _BOTH,
+            ranges={"amplitude1": _amplitude_regime(None), "amplitude2": Range(0.0, 0.0)},
+            regime=_REGIME + "; rod 2 starts hanging (amplitude2 = 0)",
         ),
     )
     checks = CHECKS
+
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        """The timestep follows the fast mode (2 ms at the model's defaults)."""
+        return {"timestep": pendulums.timestep_for(_omega_fast(params), _rate0(type(self)), "omega_fast")}
 
     def validate(self, params: Mapping[str, Any]) -> None:
         if params["amplitude1"] == 0 and params["amplitude2"] == 0:
@@ -142,6 +255,10 @@ class DoublePendulum(Scenario):
             "shape-slow": float(ratios[0]),
             "shape-fast": float(ratios[1]),
             "energy-drift": 0.0,
+            "_tolerance": {
+                name: self.check(name).tolerance * max(1.0, (1 + r**2) / (1 + SHAPE_RATIO_REF**2))
+                for name, r in (("shape-slow", ratios[0]), ("shape-fast", ratios[1]))
+            },
         }
 
     def duration(self, prediction: Mapping[str, Any]) -> float:
@@ -164,6 +281,11 @@ class DoublePendulum(Scenario):
             "shape-fast": shapes.get(1, np.nan),
             "energy-drift": pendulums.energy_drift(energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]),
         }
+
+
+@functools.cache
+def _rate0(cls: type[DoublePendulum]) -> float:
+    return pendulums.default_rate(cls(), _omega_fast)
 
 
 def absolute(qpos: np.ndarray) -> np.ndarray:
@@ -232,8 +354,8 @@ class DoublePendulumEnv(PendulumEnv):
 
     Arguments
         ``case`` (slow-mode, fast-mode, released, unequal), ``params`` (mass1, mass2, length1, length2,
-        amplitude1, amplitude2, g), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e.
-        10 ms), ``render_mode``.
+        amplitude1, amplitude2, g), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10: ten
+        derived steps, 17.6 ms at the defaults), ``render_mode``.
 
     Version History
         v0: initial version.

@@ -7,6 +7,7 @@ the origin, a point bob at ``length`` below it).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from typing import Any
 
@@ -17,13 +18,14 @@ from rigidbench import signals
 from rigidbench.analytic import oscillations as osc
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import PendulumEnv, RodLength
-from rigidbench.params import Gravity, Numeric, Param, Range, positive
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.params import Gravity, Numeric, Param, Range
+from rigidbench.scenario import Case, Check, Derived, Scenario
 from rigidbench.simulate import Trajectory
 
 _RK4 = (
-    "RK4 at dt = 2 ms: relative frequency error (omega0 dt)^4/120 ~ 1e-11 (omega0 dt = 6e-3); crossings "
-    "cubic-interpolated, O(dt^4); 20 periods fitted"
+    "RK4 at dt = 6.26e-3 / omega_max (2 ms at the defaults; omega_max = sqrt(g/l) max(1, 2 sin(a/2)), the bob's "
+    "largest rate): relative frequency error (omega dt)^4/120 ~ 1e-11; crossings cubic-interpolated, O(dt^4); 20 "
+    "periods fitted"
 )
 CHECKS = (
     Check("period", "s", 1e-6, "rel", _RK4, "O1: T = 4 sqrt(l_eq/g) K(sin(a/2)), l_eq = I_O/(m l) (O2)"),
@@ -33,7 +35,7 @@ CHECKS = (
         1e-7,
         "rel",
         "energy conservation fixes the turning angle; RK4 energy error ~1e-13 here; the extremum is "
-        "cubic-interpolated, error (omega dt)^4 ~ 1e-10",
+        "cubic-interpolated, error (omega dt)^4 ~ 1e-10 (omega dt fixed by the derived timestep)",
         "O1: released from rest, the pendulum turns at +-amplitude",
     ),
     Check(
@@ -41,8 +43,8 @@ CHECKS = (
         "1",
         1e-8,
         "abs",
-        "RK4 is not symplectic: relative drift ~ T (omega dt)^6/(72 dt) <~ 4e-11 over the run (100 s); "
-        "1e-8 leaves 2 decades",
+        "RK4 is not symplectic: relative drift ~ T (omega dt)^6/(72 dt) <~ 4e-11 over the run (20 periods at the "
+        "derived omega dt); 1e-8 leaves 2 decades",
         "O1: E = 1/2 I_O th'^2 + m g l (1 - cos th) conserved (relative to m g l (1 - cos a))",
     ),
 )
@@ -55,16 +57,19 @@ class Pendulum(Scenario):
     slug = "pendulum"
     title = "Simple pendulum at any amplitude (exact elliptic period)"
     env_id = "rigidbench/SimplePendulum-v0"  # gymnasium's own classic-control Pendulum-v1 is a different problem
+    # The theory (O1) is exact at every amplitude and has no scale of its own: l and g only set the time scale
+    # sqrt(l/g), which the derived timestep and run length follow. The bounds are generous: 1 mm to 100 m, a
+    # microgravity 1e-6 m/s^2 to 100 g, a microradian to 0.04 rad short of upright.
     params = (
-        Param("length", "m", "distance l from the pivot to the point bob", positive(100.0), RodLength()),
+        Param("length", "m", "distance l from the pivot to the point bob", Range(1e-3, 100.0), RodLength()),
         Param(
             "amplitude",
             "rad",
             "release angle from the downward vertical (at rest); pi would balance upright",
-            Range(0.0, 3.1, low_open=True),
+            Range(1e-6, 3.1),
             Numeric("amplitude"),
         ),
-        Param("g", "m/s^2", "gravitational acceleration (along -z)", positive(1e3), Gravity()),
+        Param("g", "m/s^2", "gravitational acceleration (along -z)", Range(1e-6, 1e3), Gravity()),
     )
     cases = (
         Case("one-radian", "released at 1 rad: period 1.07 T0", {"amplitude": 1.0}, _ALL),
@@ -75,6 +80,11 @@ class Pendulum(Scenario):
         Case("near-inverted", "released at 3 rad, 0.14 rad from upright: period 2.55 T0", {"amplitude": 3.0}, _ALL),
     )
     checks = CHECKS
+
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        """The timestep follows the fastest rate: sqrt(g/l), or the bob's rate at the bottom, 2 sqrt(g/l) sin(a/2),
+        when larger (a near-inverted release swings through the bottom at up to twice sqrt(g/l))."""
+        return {"timestep": pendulums.timestep_for(_omega_max(params), _rate0(type(self)), _OMEGA_MAX)}
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         data.qpos[0] = params["amplitude"]
@@ -90,7 +100,7 @@ class Pendulum(Scenario):
             "_g": g,
             "_amplitude": amplitude,
             "_scale": amplitude,
-            "_energy_scale": p.mass * g * p.length * (1 - np.cos(amplitude)),
+            "_energy_scale": 2 * p.mass * g * p.length * np.sin(amplitude / 2) ** 2,  # m g l (1 - cos a)
             "period": osc.pendulum_period(length_eq, g, amplitude),
             "turning-angle": amplitude,
             "energy-drift": 0.0,
@@ -110,6 +120,19 @@ class Pendulum(Scenario):
                 pendulums.row_energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]
             ),
         }
+
+
+_OMEGA_MAX = "sqrt(g/l) max(1, 2 sin(amplitude/2))"
+
+
+def _omega_max(params: Mapping[str, Any]) -> float:
+    """The pendulum's fastest rate (rad/s): sqrt(g/l), or its angular speed at the bottom if larger."""
+    return float(np.sqrt(params["g"] / params["length"]) * max(1.0, 2 * np.sin(params["amplitude"] / 2)))
+
+
+@functools.cache
+def _rate0(cls: type[Pendulum]) -> float:
+    return pendulums.default_rate(cls(), _omega_max)
 
 
 class SimplePendulumEnv(PendulumEnv):
@@ -141,7 +164,8 @@ class SimplePendulumEnv(PendulumEnv):
 
     Arguments
         ``case`` (one-radian, small-amplitude, large-amplitude, near-inverted), ``params`` (length, amplitude,
-        g), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e. 20 ms), ``render_mode``.
+        g), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10: ten derived steps, 20 ms at the
+        defaults), ``render_mode``.
 
     Version History
         v0: initial version.

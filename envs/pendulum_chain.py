@@ -8,6 +8,18 @@ from which `rigidbench.envs.pendulums.ChainSize` builds the chain through `mujoc
 The number of modes depends on ``n``: the lowest and highest modes get a row each with their frequencies, and
 every mode is covered by rows holding the largest relative error over all of them (NaN, a failure, if any mode's
 frequency could not be measured). The prediction holds every mode (``prediction["_omega_O7"]``, ``["_omega_O5"]``).
+
+Amplitude: the theory is linear, and one pendulum released excites every mode. The quartic terms of the
+Lagrangian (`rigidbench.analytic.oscillations.spring_chain_quartic`: gravity's th^4/24 and the springs' sin th)
+shift each mode's frequency by ``delta_r a^2`` (`rigidbench.analytic.oscillations.amplitude_shifts`, the averaged
+Lagrangian) and, near the modes' 1:1 resonances, exchange energy between neighbouring modes, which leaks a relative
+``~ delta omega / (omega_{r+1} - omega_r)`` of one mode into the next: the mode-purity residual (measured 2.5e-6 at
+the defaults, as this estimates). The case regimes bound |amplitude| so that both stay below a quarter of their
+tolerances, and the attachment points of neighbours stay s/10 apart (`pendulums.spring_collapse_limit`).
+
+Time scales: the timestep follows the highest mode (2 ms at the defaults), and a run lasts 30.5 periods of the
+lowest; kappa = k d^2 / (m g l) <= 24.75 (a range of k that depends on m, g, l and d: omega_highest / omega_lowest
+<= 10) keeps runs below 3e5 steps.
 """
 
 from __future__ import annotations
@@ -22,17 +34,17 @@ import numpy as np
 from rigidbench.analytic import oscillations as osc
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, ChainSize, PendulumEnv, RodLength, SpringHeight, SpringStiffness
-from rigidbench.params import Gravity, Numeric, Param, Range, positive
-from rigidbench.scenario import Case, Check, Params, Scenario
+from rigidbench.params import Bound, Gravity, Numeric, Param, Range
+from rigidbench.scenario import Case, Check, Derived, Domain, Params, Scenario
 from rigidbench.simulate import Trajectory
 
 MAX_PENDULUMS = 40
 
 _FREQ = (
-    "RK4 at dt = 2 ms: relative frequency error (omega dt)^4/120 <~ 5e-11; normal coordinates from the O7 mode "
-    "vectors (modal filter), crossings cubic-interpolated over >= 30 periods; one pendulum released at 1 mrad: "
-    "nonlinear shifts <~ 1e-7 (O1's a^2/16 and the spring geometry, see coupled_pendulums)"
-)
+    "RK4 at dt = 6.55e-3 / omega_highest (2 ms at the defaults): relative frequency error (omega dt)^4/120 <~ 2e-11; "
+    "normal coordinates from the O5 mode vectors (modal filter), crossings cubic-interpolated over >= 30 periods; "
+    "first-order amplitude shifts <= 2.5e-7 in the case regime (1e-7 at the default 1 mrad; module docstring)"
+) + pendulums.ROUNDOFF.format(factor="0.5", measured="1e-3 .. 0.04 rho")
 CHECKS = (
     Check(
         "omega-lowest",
@@ -75,7 +87,7 @@ CHECKS = (
         "max |q_r - (best sinusoid at the measured omega_r)| / its amplitude. Nonlinear mode coupling leaks O(a^2) "
         "~ 1e-6 of the amplitude into every q_r, divided by the weakest mode's share sin(pi/2N) of the release "
         "(0.31 at N = 5, 0.13 at N = 12); 1e-4 leaves a decade. A shape error delta shows up as ~delta times the "
-        "other modes' amplitudes",
+        "other modes' amplitudes" + pendulums.ROUNDOFF.format(factor="3", measured="0.01 .. 0.14 rho"),
         "O5: th_j proportional to cos(r pi (j + 1/2) / N); O7: normal coordinates oscillate alone (Wilcox eq. 12.26)",
     ),
     Check(
@@ -83,7 +95,7 @@ CHECKS = (
         "1",
         1e-8,
         "abs",
-        pendulums.SPRING_CHAIN_ENERGY_REASON,
+        pendulums.SPRING_CHAIN_ENERGY_REASON + pendulums.ROUNDOFF.format(factor="50", measured="4 .. 5.4 rho"),
         "O5: " + pendulums.SPRING_CHAIN_ENERGY,
     ),
 )
@@ -94,6 +106,25 @@ _ALL = (
     "mode-frequencies-closed-form",
     "mode-purity",
     "energy-drift",
+)
+
+
+# kappa = k d^2 / (m g l) <= 24.75: omega_highest / omega_lowest <= sqrt(1 + 4 kappa) = 10.
+KAPPA_MAX = (10.0**2 - 1) / 4
+# The neglected first-order amplitude effects may take this fraction of a check's tolerance.
+SHIFT_SHARE = 0.25
+_REGIME = {
+    "amplitude": Bound(
+        "[-a_max, a_max], a_max(n, mass, length, k, d, g) from the first-order amplitude shift (case regime)",
+        lambda p: Range(-amplitude_limit(p), amplitude_limit(p)),
+        ("n", "mass", "length", "k", "d", "g"),
+    )
+}
+_REGIME_TEXT = (
+    "the linear theory's amplitudes (O5/O7): |amplitude| <= a_max, where the first-order amplitude shift of the modes "
+    "(averaged quartic Lagrangian) stays below a quarter of the frequency tolerance (1e-6), the energy it moves "
+    "between neighbouring modes near their 1:1 resonance (shift x omega / mode spacing) below a quarter of the "
+    "mode-purity tolerance (1e-4), and the springs' attachment points s/10 apart"
 )
 
 
@@ -114,21 +145,30 @@ class PendulumChain(Scenario):
             ChainSize(),
             integer=True,
         ),
-        Param("mass", "kg", "mass m of each point bob", positive(1e3), BobMass()),
-        Param("length", "m", "distance l from each pivot to its bob", positive(100.0), RodLength()),
+        # Bounds: 1 g to 1 t, 1 mm to 100 m, microgravity to 100 g. The springs matter through kappa = k d^2 /
+        # (m g l): k's own range is wide and its dependent range bounds kappa (run length, module docstring).
+        Param("mass", "kg", "mass m of each point bob", Range(1e-3, 1e3), BobMass()),
+        Param("length", "m", "distance l from each pivot to its bob", Range(1e-3, 100.0), RodLength()),
         Param(
             "k",
             "N/m",
             "stiffness of each coupling spring (linear, relaxed at equilibrium)",
-            positive(1e4),
+            Range(1e-15, 1e15),
             SpringStiffness(),
+            within=Bound(
+                f"(0, {KAPPA_MAX:g}] m g l / d^2 (omega_highest / omega_lowest <= 10: 30 slow periods stay below "
+                "3e5 steps)",
+                lambda p: Range(0.0, KAPPA_MAX * p["mass"] * p["g"] * p["length"] / p["d"] ** 2, low_open=True),
+                ("mass", "length", "d", "g"),
+            ),
         ),
         Param(
             "d",
             "m",
-            "distance below the pivots at which the springs are attached, 0 < d <= length",
-            positive(100.0),
+            "distance below the pivots at which the springs are attached, on the rods between pivots and bobs",
+            Range(1e-6, 100.0),
             SpringHeight(),
+            within=Bound("[1e-3 length, length]", lambda p: Range(1e-3 * p["length"], p["length"]), ("length",)),
         ),
         Param(
             "amplitude",
@@ -137,29 +177,47 @@ class PendulumChain(Scenario):
             Range(-1.0, 1.0),
             Numeric("amplitude"),
         ),
-        Param("g", "m/s^2", "gravitational acceleration (along -z)", positive(1e3), Gravity()),
+        Param("g", "m/s^2", "gravitational acceleration (along -z)", Range(1e-6, 1e3), Gravity()),
     )
     cases = (
-        Case("end-released", "pendulum 1 released, the others at rest: every mode excited", {}, _ALL),
+        Case(
+            "end-released",
+            "pendulum 1 released, the others at rest: every mode excited",
+            {},
+            _ALL,
+            ranges=_REGIME,
+            regime=_REGIME_TEXT,
+        ),
         Case(
             "strong-coupling",
             "k = 10 N/m (k d^2 / m g l = 0.25): the mode frequencies spread over a factor 1.7",
             {"k": 10.0},
             _ALL,
+            ranges=_REGIME,
+            regime=_REGIME_TEXT,
         ),
     )
     checks = CHECKS
+    domains = (
+        Domain(
+            "double-precision",
+            "O5/O7 measured in MuJoCo",
+            pendulums.ROUNDOFF_DOMAIN_TEXT,
+            lambda p: pendulums.roundoff_outside(
+                p, (round(p["n"]) - 1) / 2 * pendulums.PIVOT_SPACING, float(p["amplitude"])
+            ),
+        ),
+    )
 
     def defaults(self) -> Params:
         """Defaults from the model file, with the chain built at its default size (the raw file is the template)."""
         return _chain_defaults(type(self))
 
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        """The timestep follows the highest mode (2 ms at the model's defaults)."""
+        return {"timestep": pendulums.timestep_for(_highest(params), _rate0(type(self)), "omega_highest")}
+
     def validate(self, params: Mapping[str, Any]) -> None:
-        if params["d"] > params["length"]:
-            raise ValueError(
-                f"parameter 'd' = {params['d']:g} m is outside the valid range (0, length = {params['length']:g}] m: "
-                "the springs are attached to the rods, between the pivots and the bobs"
-            )
         if params["amplitude"] == 0:
             raise ValueError("parameter 'amplitude' = 0 rad: nothing moves (valid: [-1, 1] rad, not 0)")
 
@@ -182,16 +240,20 @@ class PendulumChain(Scenario):
         n, p = len(pend), pend[0]
         mgl = p.mass * pendulums.gravity(model) * p.length
         k = float(sp.stiffness[0])
-        modes = osc.normal_modes(*osc.spring_chain_matrices(n, p.inertia_pivot, mgl, k, sp.height))
-        closed = osc.chain_frequencies(n, p.inertia_pivot, mgl, k, sp.height)
+        # The modal filter uses the O5 shapes (exact however weak the coupling); O7's eigenvalues are the theory of
+        # the mode-frequencies row.
+        modes = osc.chain_modes(n, p.inertia_pivot, mgl, k, sp.height)
+        closed = modes.frequencies
+        omega_o7 = osc.normal_modes(*osc.spring_chain_matrices(n, p.inertia_pivot, mgl, k, sp.height)).frequencies
         angles0 = data.qpos.copy()
         return {
             "_modes": modes,
-            "_omega_O7": modes.frequencies,
+            "_omega_O7": omega_o7,
             "_omega_O5": closed,
             "_angles0": angles0,
             "_scale": float(np.abs(angles0).max()),
             "_energy_scale": float(pendulums.row_energy(model, angles0[None], np.zeros((1, n)))[0]),
+            "_tolerance": _roundoff_tolerances(pendulums.roundoff(model, float(np.abs(angles0).max()))),
             "omega-lowest": float(closed[0]),
             "omega-highest": float(closed[-1]),
             "mode-frequencies": 0.0,
@@ -219,6 +281,52 @@ class PendulumChain(Scenario):
                 pendulums.row_energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]
             ),
         }
+
+
+@functools.cache
+def _rate0(cls: type[PendulumChain]) -> float:
+    return pendulums.default_rate(cls(), _highest)
+
+
+def _roundoff_tolerances(rho: float) -> dict[str, float]:
+    """Each check's tolerance, or its double-precision floor if larger (`pendulums.ROUNDOFF`)."""
+    factor = {"mode-purity": 3.0, "energy-drift": 50.0}
+    return {c.name: max(c.tolerance, factor.get(c.name, 0.5) * rho) for c in CHECKS}
+
+
+def _highest(p: Mapping[str, Any]) -> float:
+    """The chain's highest mode frequency (rad/s) from the requested parameters (point bobs, O5)."""
+    inertia = p["mass"] * p["length"] ** 2 + 1e-9
+    mgl = p["mass"] * p["g"] * p["length"]
+    return float(osc.chain_frequencies(round(p["n"]), inertia, mgl, p["k"], p["d"])[-1])
+
+
+@functools.cache
+def _amplitude_limit(n: int, mass: float, length: float, k: float, d: float, g: float) -> float:
+    inertia = mass * length**2 + 1e-9
+    mgl = mass * g * length
+    modes = osc.chain_modes(n, inertia, mgl, k, d)
+    a = 1e-3
+    release = np.zeros(n)
+    release[0] = a
+    shift = np.abs(osc.amplitude_shifts(modes, osc.spring_chain_quartic(mgl, k, d), modes.coordinates(release)))
+    per_a2 = shift / a**2
+    w = modes.frequencies
+    spacing = np.diff(w).min()
+    tol = {c.name: c.tolerance for c in CHECKS}
+    limits = [
+        pendulums.spring_collapse_limit(d) ** 2,
+        SHIFT_SHARE * tol["omega-lowest"] / per_a2.max(),
+        SHIFT_SHARE * tol["mode-purity"] * spacing / (per_a2 * w).max() if spacing > 0 else np.inf,
+    ]
+    return float(np.sqrt(min(limits)))
+
+
+def amplitude_limit(p: Mapping[str, Any]) -> float:
+    """Largest |amplitude| (rad) of the linear theory's regime (module docstring): the first-order amplitude shift
+    below `SHIFT_SHARE` of the frequency tolerance, the resonant leak shift x omega / (mode spacing) below that of
+    the mode-purity tolerance, the attachment points s/10 apart."""
+    return _amplitude_limit(round(p["n"]), *(float(p[x]) for x in ("mass", "length", "k", "d", "g")))
 
 
 @functools.cache
@@ -268,7 +376,8 @@ class PendulumChainEnv(PendulumEnv):
 
     Arguments
         ``case`` (end-released, strong-coupling), ``params`` (n, mass, length, k, d, amplitude, g), ``profile``,
-        ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e. 20 ms), ``render_mode``.
+        ``integrator``, ``timestep``, ``frame_skip`` (default 10: ten derived
+        steps, 20 ms at the defaults), ``render_mode``.
 
     Version History
         v0: initial version.

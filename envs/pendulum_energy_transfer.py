@@ -108,7 +108,7 @@ class PendulumEnergyTransferEnv(ClosedLoopTask, PendulumEnv):
         Theory action (a baseline; the optimum of the linearised model): `bang_bang_schedule`, full torque with
         the sign of pendulum 2's beat response (O3-O4) to a blow on pendulum 1 at each instant, phased to
         arrive at T: it drives pendulum 1 at the normal-mode carrier, reversing with the beat. It is the exact
-        optimum of the linear model with the torque held over each 20 ms step; MuJoCo's pendulums are
+        optimum of the linear model with the torque held over each 19.6 ms step; MuJoCo's pendulums are
         nonlinear (sin th, the spring's geometry), at amplitudes <~ 0.03 rad here, relative O(th^2) ~ 1e-3.
 
     Observation Space
@@ -134,7 +134,8 @@ class PendulumEnergyTransferEnv(ClosedLoopTask, PendulumEnv):
 
     Arguments
         ``params`` (CoupledPendulums': mass, length, k, d, amplitude1, amplitude2, g), ``regret``, ``profile``,
-        ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e. 20 ms), ``render_mode``, ``width``,
+        ``integrator``, ``timestep``, ``frame_skip`` (default 10: ten
+        derived steps, 19.6 ms at the defaults), ``render_mode``, ``width``,
         ``height``.
 
     Version History

@@ -15,9 +15,9 @@ l^2`` read back from the compiled model (THEORY.md O2).
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import mujoco
@@ -26,14 +26,99 @@ import numpy as np
 from rigidbench import signals
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.params import Value
+from rigidbench.scenario import Derived
 
 # The energy check shared by the spring-coupled pendulums (coupled pair and chain): RK4 at their 2 ms step.
 SPRING_CHAIN_ENERGY_REASON = (
     "RK4 is not symplectic: relative drift ~ T (omega dt)^6 / (72 dt) <~ 2e-10 over the run; 1e-8 leaves 1.5 decades"
 )
+# Pivot spacing s (m) of the spring-coupled models (``coupled_pendulums.xml``: pivots at x = -+0.25 m;
+# ``pendulum_chain.xml``: its ``spacing``): the springs' rest length.
+PIVOT_SPACING = 0.5
+# Double precision. MuJoCo computes gravity's torque and the springs' lengths from world positions: a lever arm
+# l sin th, or a stretch d sin th, measured against pivots up to X from the origin carries an absolute error ~ eps X,
+# so the restoring torque has a relative error rho = eps X (M g + k d) / ((M g l + k d^2) |a|) (a = the largest
+# release angle). Measured (census draws at amplitudes 1e-14 .. 1e-7 rad): energy drift 4 .. 5.4 rho, frequencies
+# 1e-3 .. 0.04 rho, mode purity 0.01 .. 0.14 rho. At the defaults rho ~ 1e-13 and no check feels it; each check's
+# tolerance is its own, or this floor times a factor ~10 above the measured ratio if larger.
+ROUNDOFF = (
+    "; floor {factor} rho if larger, rho = eps X (M g + k d) / ((M g l + k d^2) |a|): the restoring torque's relative "
+    "double-precision error, MuJoCo's lever arms and spring lengths being differences of world positions up to X from "
+    "the origin (measured {measured}; rho ~ 1e-13 at the defaults)"
+)
+
+
+ROUNDOFF_MAX = 1e-2
+ROUNDOFF_DOMAIN_TEXT = (
+    "rho = eps X (M g + k d) / ((M g l + k d^2) |a|) <= 1e-2: the restoring torque, computed by MuJoCo from world "
+    "positions up to X from the origin, is resolved in double precision (at rho ~ 1 the release is below the "
+    "rounding of the model's coordinates and no oscillation can be measured; below 1e-2 the checks' tolerances "
+    "include a floor ~ rho, their reasons say how)"
+)
+
+
+def roundoff_outside(params: Mapping[str, Any], extent: float, amplitude: float) -> str | None:
+    """The double-precision domain's test (`ROUNDOFF_DOMAIN_TEXT`) from requested parameters: None inside, else a
+    phrase naming the parameters."""
+    m, g, length, k, d = (float(params[x]) for x in ("mass", "g", "length", "k", "d"))
+    rho = np.finfo(float).eps * extent * (m * g + k * d) / ((m * g * length + k * d * d) * abs(amplitude))
+    if rho <= ROUNDOFF_MAX:
+        return None
+    return (
+        f"amplitude {amplitude:g} rad with length = {length:g} m, d = {d:g} m, pivots up to {extent:g} m out "
+        f"(rho = {rho:.2g})"
+    )
+
+
+def roundoff(model: mujoco.MjModel, amplitude: float) -> float:
+    """rho (see `ROUNDOFF`): the relative double-precision error of the restoring torque of side-by-side pendulums,
+    released at `amplitude` (rad, the largest angle)."""
+    pend = pendulums(model)
+    p, g = pend[0], gravity(model)
+    sp = springs(model)
+    k = float(sp.stiffness.max()) if len(sp.stiffness) else 0.0
+    d = sp.height if len(sp.stiffness) else 0.0
+    extent = max(abs(q.pivot_x) for q in pend)
+    eps = np.finfo(float).eps
+    return float(eps * extent * (p.mass * g + k * d) / ((p.mass * g * p.length + k * d * d) * abs(amplitude)))
+
+
+def spring_collapse_limit(height: float) -> float:
+    """Largest release angle (rad) at which two neighbouring attachment points, d below pivots s apart, stay at
+    least s/10 apart when the pendulums swing against each other (2 d sin a <= 0.9 s)."""
+    return float(np.arcsin(min(1.0, 0.45 * PIVOT_SPACING / height)))
+
+
 SPRING_CHAIN_ENERGY = (
     "E = sum 1/2 I_O th'^2 + m g l (1 - cos th) + 1/2 k (L - L0)^2 conserved (relative to its initial value)"
 )
+
+# The reference step of the model files (s): the derived timestep equals it at each model's defaults.
+REFERENCE_TIMESTEP = 2e-3
+
+
+def timestep_for(omega_max: float, omega_default: float, what: str) -> Derived:
+    """The reference timestep for a fastest angular rate `omega_max` (rad/s): ``dt = c / omega_max`` with ``c =
+    2 ms x omega_default``, `omega_default` being the smallest fastest rate of the scenario's default cases
+    (`default_rate`): every default case is integrated at a step no longer than the model file's 2 ms, the slowest
+    at exactly 2 ms, and every other set of parameters at the same ``omega dt``.
+
+    RK4's relative frequency error is (omega dt)^4 / 120 and its relative energy drift per period ~ 2 pi (omega
+    dt)^5 / 72: both then stay what they are in the default cases, whatever the time scales. `what` names
+    omega_max.
+    """
+    c = REFERENCE_TIMESTEP * omega_default
+    return Derived(
+        REFERENCE_TIMESTEP * (omega_default / omega_max),
+        f"dt = {c:.4g} / omega_max (omega_max dt = {c:.3g}, as in the default cases, where dt <= 2 ms: RK4 frequency "
+        f"error (omega dt)^4/120 = {c**4 / 120:.1e}); omega_max = {what} = {omega_max:.6g} rad/s",
+    )
+
+
+def default_rate(scenario, rate) -> float:
+    """The smallest of `rate(params)` (rad/s) over the scenario's cases at their default parameters."""
+    return min(rate(scenario.resolve(case)) for case in scenario.cases)
+
 
 BODY, HINGE, BOB_SITE, SPRING_SITE, ROD, BALL = "pendulum", "hinge", "bob", "spring", "rod", "ball"
 _QPOS_QVEL = mujoco.mjtState.mjSTATE_QPOS | mujoco.mjtState.mjSTATE_QVEL

@@ -206,3 +206,60 @@ def test_double_pendulum_small_oscillations_equal_solve_ivp_of_the_nonlinear_equ
         period = 2 * np.pi / modes.frequencies[r]
         sol = solve_ivp(rhs, (0, period), y0, method="DOP853", rtol=1e-13, atol=1e-16)
         np.testing.assert_allclose(sol.y[:2, -1], y0[:2], atol=1e-5 * 1e-6)
+
+
+# ---- beyond the linear theory (issue 13) ---------------------------------------------------------------------
+
+
+def test_anti_phase_period_is_the_elliptic_period_without_spring_and_the_linear_one_at_small_amplitude():
+    for a in (1e-3, 0.5, 1.0):
+        assert osc.anti_phase_period(1.0, G, 0.0, 0.5, a) == pytest.approx(osc.pendulum_period(1.0, G, a), rel=1e-12)
+    linear = 2 * np.pi / osc.coupled_frequencies(1.0, G, 1.0, 0.5)[1]
+    assert osc.anti_phase_period(1.0, G, 1.0, 0.5, 1e-6) == pytest.approx(linear, rel=1e-12)
+
+
+def test_anti_phase_period_equals_solve_ivp_of_the_level_spring_motion():
+    """I th'' = -(M g h sin th + 2 k d^2 sin th cos th) (V = 2 M g h (1 - cos th) + 2 k d^2 sin^2 th, kinetic I th'^2),
+    from rest at 0.8 rad: the first return to th = 0.8 rad is the period."""
+    inertia, mgl, k, d, a = 1.3, 2.0 * G, 7.0, 0.4, 0.8
+
+    def rhs(t, y):
+        return [y[1], -(mgl * np.sin(y[0]) + 2 * k * d**2 * np.sin(y[0]) * np.cos(y[0])) / inertia]
+
+    def back(t, y):
+        return y[1]
+
+    back.direction = -1  # th' falls through 0 at the release turning point: t = 0, T, 2T, ...
+    period = osc.anti_phase_period(inertia, mgl, k, d, a)
+    sol = solve_ivp(rhs, (0, 1.5 * period), [a, 0.0], rtol=1e-12, atol=1e-14, events=back, dense_output=True)
+    returns = [t for t in sol.t_events[0] if t > 0.5 * period]
+    assert returns[0] == pytest.approx(period, rel=1e-9)
+
+
+def test_first_order_amplitude_shift_is_a_squared_over_16_for_a_lone_pendulum_and_the_closed_forms_for_beats():
+    modes = osc.normal_modes(np.eye(1), G * np.eye(1))
+    shift = osc.amplitude_shifts(modes, osc.spring_chain_quartic(G, 0.0, 0.0), [1e-3])
+    assert shift[0] == pytest.approx(-(1e-3**2) / 16, rel=1e-6)
+    for k in (0.25, 1.0, 20.0):
+        kappa = k * 0.25 / G
+        modes = osc.coupled_modes(1.0, G, k, 0.5)
+        q = modes.coordinates(np.array([1e-3, 0.0]))
+        s, a = osc.amplitude_shifts(modes, osc.spring_chain_quartic(G, k, 0.5), q), 1e-3
+        assert s[0] == pytest.approx(-(0.75 + 2 * kappa) * a**2 / 16, rel=1e-5)
+        assert s[1] == pytest.approx(-(0.75 + 4 * kappa) * a**2 / (16 + 32 * kappa), rel=1e-5)
+
+
+def test_first_order_amplitude_shift_of_the_double_pendulum_fast_mode_is_the_measured_minus_1p85_a1_squared():
+    modes = osc.normal_modes(*osc.double_pendulum_matrices(1.0, 1.0, 1.0, 1.0, G))
+    a1 = 1e-4
+    q = modes.coordinates(np.array([a1, a1 * modes.shape_ratios()[1, 1]]))
+    shift = osc.amplitude_shifts(modes, osc.double_pendulum_quartic(1.0, 1.0, 1.0, 1.0, G), q)
+    assert shift[1] / a1**2 == pytest.approx(-1.85, abs=0.01)
+
+
+def test_exact_mode_shapes_hold_however_weak_the_coupling():
+    modes = osc.coupled_modes(1.0, G, 1e-20, 0.5)
+    np.testing.assert_allclose(modes.shape_ratios()[1], [1.0, -1.0], rtol=0, atol=0)
+    assert osc.Beats(1e-3, G, G).transfer_time == np.inf
+    chain = osc.chain_modes(6, 1.0, G, 1e-20, 0.5)
+    np.testing.assert_allclose(chain.shapes.T @ chain.inertia @ chain.shapes, np.eye(6), atol=1e-14)
