@@ -282,9 +282,13 @@ class HeavyTop:
 
     Attributes
     ----------
-    a, b, beta : float
-        a = I3 omega3 / I1, b = p_phi / I1 (1/s); beta = 2 M g h / I1 (1/s^2).
-        u_dot^2 = f(u) = (1 - u^2)(alpha - beta u) - (b - a u)^2 = beta (u - u1)(u - u2)(u - u3).
+    a, beta : float
+        a = I3 omega3 / I1 (1/s); beta = 2 M g h / I1 (1/s^2).
+        u_dot^2 = f(u) = (1 - u^2)(alpha - beta u) - (b - a u)^2 = beta (u - u1)(u - u2)(u - u3), b = p_phi / I1.
+    c : float
+        b - a u0 = phi_dot0 sin^2(theta0) (1/s), kept as formed from the initial state: b itself (the property
+        `b`) is c + a u0, and b - a u0 computed from it would cancel to the digits of a u0 that c lacks (near the
+        inverted or upright top with a slow precession, a u0 >> c).
     u0 : float
         cos(theta0) at t = 0.
     w_roots : tuple of float
@@ -299,7 +303,7 @@ class HeavyTop:
     """
 
     a: float
-    b: float
+    c: float
     beta: float
     u0: float
     sin2_tilt: float
@@ -307,6 +311,11 @@ class HeavyTop:
     nutation_period: float
     t_max_tilt: float
     mean_precession_rate: float = float("nan")
+
+    @property
+    def b(self) -> float:
+        """b = p_phi / I1 = c + a u0 (1/s) ([T] T2)."""
+        return self.c + self.a * self.u0
 
     @property
     def roots(self) -> tuple[float, float, float]:
@@ -329,9 +338,15 @@ class HeavyTop:
         return self.theta_at_w(self.w_roots[0])
 
     def precession_rate_at_w(self, w: np.ndarray) -> np.ndarray:
-        """phi_dot = (b - a u)/(1 - u^2) (rad/s) at u = u0 - w ([T] T2)."""
+        """phi_dot = (b - a u)/(1 - u^2) (rad/s) at u = u0 - w ([T] T2).
+
+        Evaluated as (c + a w) / (sin^2(theta0) + 2 u0 w - w^2), with c = b - a u0 kept from the initial state
+        and 1 - u^2 expanded about u0: no term cancels that the state itself does not make cancel, so the
+        relative error is a few ulps times the conditioning of the sums c + a w and 1 - u^2 (test:
+        `test_precession_rate_at_w_keeps_its_digits_near_the_inverted_top`).
+        """
         w = np.asarray(w, dtype=float)
-        return (self.b - self.a * self.u0 + self.a * w) / (self.sin2_tilt + 2 * self.u0 * w - w * w)
+        return (self.c + self.a * w) / (self.sin2_tilt + 2 * self.u0 * w - w * w)
 
     def w(self, t: np.ndarray) -> np.ndarray:
         """u0 - u(t) at times `t` (s) ([T] T3)."""
@@ -426,11 +441,11 @@ def heavy_top(
     offset = special.ellipkinc(np.arcsin(np.sqrt(r)), m) / nu
     u0_dot = -np.sin(tilt) * tilt_rate
     t1 = -offset if u0_dot >= 0 else offset
-    top = HeavyTop(a, c + a * u0, beta, u0, s2, (w1, w2, w3), float(period), float(t1))
+    top = HeavyTop(a, c, beta, u0, s2, (w1, w2, w3), float(period), float(t1))
     # Trapezoid rule on one full period of a smooth periodic integrand converges exponentially.
     t = t1 + period * np.arange(4096) / 4096
     mean_rate = float(np.mean(top.precession_rate_at_w(top.w(t))))
-    return HeavyTop(a, top.b, beta, u0, s2, (w1, w2, w3), float(period), float(t1), mean_rate)
+    return HeavyTop(a, c, beta, u0, s2, (w1, w2, w3), float(period), float(t1), mean_rate)
 
 
 def steady_precession_rates(
