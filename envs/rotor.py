@@ -28,6 +28,22 @@ OMEGA_PARAM = Param(
     size=3,
 )
 
+# Principal moments of the free tops (kg m^2). Their motion depends only on the ratios of the moments (and omega),
+# so the scale is free: four decades below the defaults (~1 kg m^2) to three above. The smallest ratio this allows,
+# 1e-7, keeps MuJoCo's solve for the angular acceleration in world axes (an inertia matrix of condition I_max /
+# I_min) accurate: measured at I3 / I1 = 1e-8, omega-body 5e-11; at 1e-10 its round-off reaches 2e-9.
+FREE_INERTIA = Range(1e-4, 1e3)
+
+# The smallest turn per step (rad) of a rate a check measures as a slope: MuJoCo adds each step's change of the state
+# to it and rounds it to an ulp, so a phase that turns by x rad per step carries a rounding error of up to eps/x of
+# its advance (systematic in the worst case: the rounding of a change far below an ulp is biased). 2 eps / 1e-8
+# keeps it at half the 1e-8 tolerance of the rate checks. Measured: a body-frame precession turning 5e-13 rad per
+# step came out 7e-5 off (the bound: 4e-4).
+MIN_TURN_PER_STEP = 2 * float(np.finfo(float).eps) / 1e-8
+
+# Most steps of a torque-free run (1.8e5 at the defaults); the rates are slopes of phases and need no whole turns.
+MAX_FREE_STEPS = 200_000
+
 
 def require_rigid_body_inertia(i1: float, i2: float, i3: float, names: str = "I1, I2, I3") -> None:
     """Refuse principal moments that no rigid body has: each must be at most the sum of the other two.
