@@ -240,6 +240,39 @@ def asymmetric_top(inertia: tuple[float, float, float], omega_body: np.ndarray) 
     )
 
 
+def separatrix_sensitivity(inertia: tuple[float, float, float], omega_body: np.ndarray) -> float:
+    """How much the elliptic solution's phase amplifies an error in the body rates near the separatrix ([T] A2, A3).
+
+    Near the separatrix L^2 = 2 E I2 the period 4 K(k) / s grows like K ~ (1/2) ln(16 / k'^2), and k'^2 is
+    proportional to the gap L^2 - 2 E I2 = sum I_i (I_i - I2) omega_i^2. A relative error eta of the body rates (each
+    |d omega_i| <= eta |omega|, anywhere on the motion, where |omega_i| <= A_i, its amplitude) moves the gap by up to
+    2 eta |omega| sum I_i |I_i - I2| A_i, i.e. ln k'^2 by up to eta times
+
+        S = 2 |omega| sum_i I_i |I_i - I2| A_i / |L^2 - 2 E I2|,
+
+    so K by eta S / 2, each period by 2 eta S in tau = s t, and omega(t) (whose slope in tau is at most its
+    amplitude) by ~2 n eta S |omega| after n periods. S >= 2; S ~ L^2 / |L^2 - 2 E I2| for a spin tilted off the
+    intermediate axis of a body with distinct moments, smaller for a slender one (I1 << I2 ~ I3), whose gap is
+    small in every state but insensitive to the rates.
+
+    Parameters
+    ----------
+    inertia : (I1, I2, I3), kg m^2, strictly increasing
+    omega_body : array_like, shape (3,)
+        Body rates (rad/s) at any instant of the motion.
+
+    Raises
+    ------
+    ValueError
+        As `asymmetric_top` (moments not increasing, or on the separatrix).
+    """
+    top = asymmetric_top(inertia, omega_body)
+    i = np.asarray(top.inertia)
+    w = np.asarray(omega_body, dtype=float)
+    gap = abs(float(np.sum(i * (i - i[1]) * w**2)))
+    return float(2 * np.linalg.norm(w) * np.sum(i * np.abs(i - i[1]) * np.asarray(top.amplitudes)) / gap)
+
+
 def flip_time(inertia: tuple[float, float, float], spin: float, tilt: float) -> float:
     """Harter-Kim reversal time for omega(0) = W (0, cos eps, sin eps) ([H] eqs 13-18, [T] A3).
 

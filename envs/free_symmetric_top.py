@@ -22,6 +22,7 @@ from rigidbench.envs.rotor import (
     FreeRotorEnv,
     free_body_motion,
     require_rigid_body_inertia,
+    round_step,
     set_free_body_rotation,
 )
 from rigidbench.params import BodyInertia, Bound, Param, Range
@@ -30,18 +31,19 @@ from rigidbench.simulate import Trajectory
 
 # Reference timestep (`FreeSymmetricTop.reference_settings`): the smaller of two limits.
 # - Body frame: omega circles e3 at Omega_b = (I3 - I1) omega3 / I1, and RK4's relative error in that rate is
-#   (Omega_b h)^4 / 120. BODY_TURN = 3e-4 rad per step is the model file's 1e-4 s at the prolate default
-#   (Omega_b = -3 rad/s): a relative error of 7e-17, below round-off.
+#   (Omega_b h)^4 / 120. BODY_TURN = 3.51e-4 rad per step: a relative error <= 1.3e-16, below round-off; rounded
+#   down to one digit (`round_step`) it gives the model file's 1e-4 s at both default cases (|Omega_b| = 3 and
+#   3.5 rad/s).
 # - World frame: the body turns at |omega| and its axis precesses about L at |L| / I1 (up to 2 |omega|, oblate).
 #   MuJoCo's quaternion step is exact while omega_B is constant, so the orientation's error grows only with the
 #   body-frame change: WORLD_TURN = 0.03 rad per step keeps the world-frame checks (precession-rate, spin-rate,
 #   momentum-drift) at <= 4e-11 (measured; it grows like WORLD_TURN^4) where Omega_b h = BODY_TURN, the largest
 #   body-frame change a world-limited step meets (test_world_limited_timestep_keeps_the_world_frame_checks).
-BODY_TURN = 3e-4
+BODY_TURN = 3.51e-4
 WORLD_TURN = 0.03
 _RK4 = (
-    "RK4 with Omega_b h <= 3e-4 and max(|omega|, |L|/I1) h <= 0.03 (reference_settings): relative rate error "
-    "(Omega_b h)^4/120 <= 7e-17, world-frame error <= 4e-11, round-off ~1e-12 over <= 2e5 steps; a rate that "
+    "RK4 with Omega_b h <= 3.51e-4 and max(|omega|, |L|/I1) h <= 0.03 (reference_settings): relative rate error "
+    "(Omega_b h)^4/120 <= 1.3e-16, world-frame error <= 4e-11, round-off ~1e-12 over <= 2e5 steps; a rate that "
     "turns >= 4.4e-8 rad per step is rounded to <= 5e-9 (domain 'resolvable-rates')"
 )
 
@@ -134,16 +136,18 @@ def rates(i1: float, i3: float, omega: Any) -> tuple[float, float, float]:
 
 
 def reference_step(i1: float, i3: float, omega: Any) -> Derived:
-    """The reference timestep (s): min(BODY_TURN / |Omega_b|, WORLD_TURN / max(|omega|, |L| / I1))."""
+    """The reference timestep (s): min(BODY_TURN / |Omega_b|, WORLD_TURN / max(|omega|, |L| / I1)), rounded down to
+    one digit."""
     body, _precession, fastest = rates(i1, i3, omega)
     by_body = BODY_TURN / abs(body) if body else np.inf
     by_world = WORLD_TURN / fastest
-    h = float(min(by_body, by_world))
+    h = round_step(min(by_body, by_world))
     which = "body frame" if by_body <= by_world else "world frame"
     return Derived(
         h,
         f"min({BODY_TURN:g} rad / |Omega_b|, {WORLD_TURN:g} rad / max(|omega|, |L|/I1)) = "
-        f"min({BODY_TURN:g} / {abs(body):.4g}, {WORLD_TURN:g} / {fastest:.4g}) = {h:.4g} s ({which} limit)",
+        f"min({BODY_TURN:g} / {abs(body):.4g}, {WORLD_TURN:g} / {fastest:.4g}), rounded down to one digit: "
+        f"{h:.1g} s ({which} limit)",
     )
 
 
