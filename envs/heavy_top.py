@@ -40,10 +40,26 @@ RK4_TARGET = 4e-9
 SPIN_TURN = 0.0188
 UNWRAP_TURN = 0.5
 RUN_NUTATIONS = 3.3  # three full nutations: four maxima of theta
+# A top falling from near the upright (released at rest below the T6 threshold at theta0 <= FALLING_TILT, the falling
+# case): its checks need the first fall only (the growth window and the first maximum, at T_nut / 2); the way back
+# up takes as long again, slowly, ~(1/gamma) ln(1/theta0).
+FALL_NUTATIONS = 0.6
+
+
+def run_nutations(tilt: float, tilt_rate: float, precession: float, spin: float, threshold: float) -> float:
+    """Nutation periods a run lasts: FALL_NUTATIONS for a falling top (see there), else RUN_NUTATIONS."""
+    falling = tilt <= FALLING_TILT and tilt_rate == 0 and precession == 0 and abs(spin) < threshold
+    return FALL_NUTATIONS if falling else RUN_NUTATIONS
+
+
 MAX_STEPS = 1_000_000
 _RK4 = (
     "RK4 with the step of reference_settings: drift of L and E <= r Omega T (Omega h)^4 / 120 <= 4e-9, errors of "
     "theta and phi of the same order; Omega h <= 0.0188, events cubic-interpolated to ~(Omega h)^4 / 384 <~ 3e-10"
+)
+_EXTREMA = (
+    " (the axis at each extremum of theta, at the zero crossings of u_dot, its components cubic-interpolated: an "
+    "absolute error ~(Omega h)^4 / 384 rad, also where the axis passes near the vertical and theta(t) has a corner)"
 )
 _DRIFT = (
     "RK4 is not symplectic: drift <= r Omega T (Omega h)^4 / 120 <= 4e-9 at the reference step (the rule above; "
@@ -64,8 +80,16 @@ _LINEAR = (
 FALLING_TILT = 1e-4
 
 CHECKS = (
-    Check("theta-min", "rad", 1e-6, "rel", _RK4, "T2: theta_min = arccos(u2), roots of the cubic f(u)"),
-    Check("theta-max", "rad", 1e-6, "rel", _RK4, "T2: theta_max = arccos(u1), roots of the cubic f(u)"),
+    Check(
+        "theta-min",
+        "rad",
+        1e-6,
+        "rel",
+        _RK4 + _EXTREMA + "; relative to max(theta_min, theta_max - theta_min): near the vertical theta_min is the "
+        "axis' distance from it, known to the axis' absolute accuracy, on the scale of the nutation",
+        "T2: theta_min = arccos(u2), roots of the cubic f(u)",
+    ),
+    Check("theta-max", "rad", 1e-6, "rel", _RK4 + _EXTREMA, "T2: theta_max = arccos(u1), roots of the cubic f(u)"),
     Check(
         "nutation-period",
         "s",
@@ -79,7 +103,9 @@ CHECKS = (
         "rad/s",
         1e-6,
         "rel",
-        _RK4 + " (phi advance between the first and last theta maxima)",
+        _RK4 + " (phi advance between the first and last theta maxima: the azimuth of the axis at each maximum, "
+        "cubic-interpolated, its whole turns in between counted from the prediction, which only an error over "
+        "pi rad per nutation could miscount)",
         "T3: Delta phi / T_nut, phi_dot = (b - a u)/(1 - u^2) over one nutation period",
     ),
     Check(
@@ -205,8 +231,8 @@ class Scales:
     Attributes
     ----------
     spin : float
-        |psi_dot| = |omega3 - phi_dot cos(theta)| at its largest: the rate at which the transverse body rates
-        turn in the body frame.
+        |Omega_b| = |I3 - I1| |omega3| / I1: the rate at which the transverse body rates turn in the body frame
+        by themselves (Euler's equations; gravity adds a torque of the pendulum's rate, `pendulum`).
     omega : float
         |omega| at its largest: the body's turning rate.
     precession : float
@@ -215,6 +241,8 @@ class Scales:
         2 pi / T_nut.
     transverse : float
         sqrt(omega1^2 + omega2^2) at its largest.
+    pendulum : float
+        sqrt(beta) = sqrt(2 M g h / I1): the rate of the gravity torque's effect.
     """
 
     spin: float
@@ -222,25 +250,28 @@ class Scales:
     precession: float
     nutation: float
     transverse: float
+    pendulum: float
 
     @property
     def fastest(self) -> float:
-        return max(self.spin, self.omega, self.nutation)
+        """The fastest rate of the state MuJoCo integrates (the azimuth's whirl near the vertical is not one)."""
+        return max(self.spin, self.omega, self.nutation, self.pendulum)
 
 
-def scales(top: tops.HeavyTop, spin: float, transverse0: float) -> Scales:
-    """The `Scales` of the motion `top` with spin omega3 (rad/s) and initial transverse body rate |omega_perp(0)|."""
+def scales(top: tops.HeavyTop, inertia_pivot: float, inertia_axial: float, spin: float, transverse0: float) -> Scales:
+    """The `Scales` of the motion `top` (moments in kg m^2, spin omega3 and the initial transverse body rate
+    |omega_perp(0)| in rad/s)."""
     w2, w1 = top.w_roots[1], top.w_roots[0]
     w = np.linspace(w2, w1, 257)
-    phi_dot = top.precession_rate_at_w(w)
     # omega_perp^2 = theta_dot^2 + phi_dot^2 sin^2(theta) = alpha - beta u (energy, THEORY.md T2) = k0 + beta w
     transverse = float(np.sqrt(max(transverse0**2 + top.beta * w1, 0.0)))
     return Scales(
-        spin=float(np.max(np.abs(spin - phi_dot * (top.u0 - w)))),
+        spin=abs(inertia_axial - inertia_pivot) * abs(spin) / inertia_pivot,
         omega=float(np.hypot(spin, transverse)),
-        precession=float(np.max(np.abs(phi_dot))),
+        precession=float(np.max(np.abs(top.precession_rate_at_w(w)))),
         nutation=2 * np.pi / top.nutation_period,
         transverse=transverse,
+        pendulum=float(np.sqrt(top.beta)),
     )
 
 
@@ -274,23 +305,27 @@ def plan(p: Mapping[str, Any]) -> Plan:
     """
     top = closed_form(p)
     transverse0 = float(np.hypot(p["nutation_rate"], p["precession"] * np.sin(p["tilt"])))
-    sc = scales(top, p["spin"], transverse0)
-    duration = RUN_NUTATIONS * top.nutation_period
     i1 = _pivot_inertia(p)
+    sc = scales(top, i1, p["I3"], p["spin"], transverse0)
+    duration = run_nutations(p["tilt"], p["nutation_rate"], p["precession"], p["spin"], _threshold(p))
+    duration *= top.nutation_period
     r = min(1.0, i1 * sc.transverse / momentum_scale(i1, p["I3"], _mgh(p), transverse0, p["spin"]))
     omega = sc.fastest
     by_rk4 = (120 * RK4_TARGET / (max(r, 1e-300) * omega**5 * duration)) ** 0.25
     by_resolution = SPIN_TURN / omega
-    by_unwrap = UNWRAP_TURN / sc.precession if sc.precession > 0 else np.inf
+    # phi is unwrapped only for a steady top (its precession rate is a slope); a nutating one's mean precession counts
+    # whole turns from the prediction, and need not follow the azimuth's whirl near the vertical
+    steady = p["nutation_rate"] == 0 and top.w_roots[0] - top.w_roots[1] < 1e-12
+    by_unwrap = UNWRAP_TURN / sc.precession if steady and sc.precession > 0 else np.inf
     limits = {"RK4 drift": by_rk4, "resolution": by_resolution, "azimuth unwrap": by_unwrap}
     which = min(limits, key=limits.get)
     h = round_step(limits[which])
     rule = (
         f"min((120 x {RK4_TARGET:g} / (r Omega^5 T))^(1/4), {SPIN_TURN:g} / Omega, {UNWRAP_TURN:g} / "
-        f"|phi_dot|max) with r = I1 |omega_perp|max / L_scale = {r:.3g}, Omega = max(|psi_dot|, |omega|, "
-        f"omega_nut)max = {omega:.4g} rad/s, T = {RUN_NUTATIONS:g} T_nut = {duration:.4g} s, |phi_dot|max = "
-        f"{sc.precession:.4g} rad/s: min({by_rk4:.4g}, {by_resolution:.4g}, {by_unwrap:.4g}) s ({which}), rounded "
-        f"down to one digit: {h:.1g} s"
+        f"|phi_dot| if steady) with r = I1 |omega_perp|max / L_scale = {r:.3g}, Omega = max(|omega|max, "
+        f"|I3 - I1| |omega3| / I1, omega_nut, sqrt(beta)) = {omega:.4g} rad/s, T = "
+        f"{duration / top.nutation_period:g} T_nut = {duration:.4g} s: min({by_rk4:.4g}, {by_resolution:.4g}, "
+        f"{by_unwrap:.4g}) s ({which}), rounded down to one digit: {h:.1g} s"
     )
     return Plan(top, sc, Derived(h, rule), duration)
 
@@ -311,12 +346,12 @@ _ALL_NAMES = ("mass", "arm", "I1", "I3", "tilt", "spin", "precession", "nutation
 
 
 def _run_length(p: Mapping[str, Any]) -> str | None:
-    """Domain test: the run (RUN_NUTATIONS nutation periods) takes at most MAX_STEPS reference steps."""
+    """Domain test: the run (`run_nutations` nutation periods) takes at most MAX_STEPS reference steps."""
     pl = _plan_or_none(p)
     if pl is not None and not pl.steps <= MAX_STEPS:
         return (
-            f"{_where(p, *_ALL_NAMES)} ({RUN_NUTATIONS:g} nutation periods of {pl.top.nutation_period:.3g} s take "
-            f"{pl.steps:.3g} steps of {pl.step.value:.1g} s)"
+            f"{_where(p, *_ALL_NAMES)} ({pl.duration / pl.top.nutation_period:g} nutation periods of "
+            f"{pl.top.nutation_period:.3g} s take {pl.steps:.3g} steps of {pl.step.value:.1g} s)"
         )
     return None
 
@@ -383,6 +418,10 @@ def _spin_bound(p: Mapping[str, Any]) -> float:
 # nutation at ~I3 omega3 / I1, so a run of RUN_NUTATIONS nutations takes ~RHO_MAX times more steps than nutations
 # need (1e5 to 1e6 at RHO_MAX = 100); a longer arm makes a spinning pendulum, not a top.
 RHO_MAX = 100.0
+# The T6 threshold omega_c = 2 sqrt(I1 M g h) / I3 is the top's natural rate (>= the pendulum's sqrt(M g h / I1) / 2):
+# at most OMEGA_C_MAX (a bound on g), so that the spins up to S = 129 omega_c and the initial rates fit RATE_RANGE.
+OMEGA_C_MAX = 1e4
+RATE_RANGE = Range(-1e6, 1e6)
 # The gyroscopic ratio beta / a^2 = 2 I1 M g h / (I3 omega3)^2 at least: a faster top nutates by ~(beta / a^2)
 # sin^2(theta0) and precesses by ~pi beta / a^2 rad per nutation, below the ~1e-11 of the state's round-off
 # relative to the 1e-6 tolerances (the mean precession needs 1.2e-4 rad over three nutations: 'advancing').
@@ -392,9 +431,9 @@ DOMAINS = (
     Domain(
         "run-length",
         "T3 (T_nut = 4 K(k) / sqrt(beta (u3 - u1)))",
-        f"{RUN_NUTATIONS:g} nutation periods in at most {MAX_STEPS:.0e} reference steps (the step follows the "
-        "fastest rate of the motion, the run its nutation: a top that nearly passes through the vertical "
-        "whirls in azimuth, one released near the separatrix of the upright nutates slowly)",
+        f"{RUN_NUTATIONS:g} nutation periods ({FALL_NUTATIONS:g} for a falling top) in at most {MAX_STEPS:.0e} "
+        "reference steps (the step follows the fastest rate of the motion, its spin at most, the run its "
+        "nutation: a top with a long arm, I1 ~ 100 I3, spins ~100 times faster than it nutates)",
         _run_length,
     ),
     Domain(
@@ -442,6 +481,34 @@ DOMAINS = (
 )
 
 _ZERO = Range(0.0, 0.0)
+# Tilts of the nutation, looping and steady cases: near the vertical their checks are ill-conditioned (theta_min -> 0
+# is checked relative to itself; a top below the sleeping threshold returns to its start only to dE / (M g h
+# theta0^2); the azimuth of a steady top's axis carries the orientation's round-off over sin(theta0)). The sleeping and
+# falling cases cover the nearly upright top.
+_OFF_VERTICAL = Range(0.01, np.pi - 0.01)
+_OFF_VERTICAL_WHY = (
+    "theta0 within 0.01 rad of the vertical makes the checks relative to theta ill-conditioned (the sleeping and "
+    "falling cases cover the nearly upright top)"
+)
+# Spins of the steady and looping cases: T4 has roots for I3^2 omega3^2 >= 4 I1 M g h cos(theta0), i.e. omega3 >=
+# omega_c sqrt(cos(theta0)) above the horizontal; at least omega_c / 100 keeps the slow root below 100 omega_c near
+# the horizontal (2 M g h / (I3 omega3)). A negative spin mirrors the motion (phi_dot -> -phi_dot).
+_STEADY_SPIN = Bound(
+    "[omega_c max(sqrt(max(cos tilt, 0)), 0.01), S]",
+    lambda p: Range(_threshold(p) * max(math.sqrt(max(math.cos(p["tilt"]), 0.0)), 0.01), _spin_bound(p)),
+    ("mass", "arm", "I1", "I3", "g", "tilt"),
+)
+# The fast root (I3 omega3 + sqrt(D)) / (2 I1 cos(theta0)) <= I3 omega3 / (I1 cos(theta0)): infinite at the
+# horizontal, so fast-precession stays above it (cos(theta0) >= 0.07) with a spin that keeps the root <= 5e5 rad/s.
+FAST_TILT = 1.5
+_FAST_SPIN = Bound(
+    "[omega_c max(sqrt(cos tilt), 0.01), min(S, 5e5 (I1 + M arm^2) cos(tilt) / I3)]",
+    lambda p: Range(
+        _threshold(p) * max(math.sqrt(max(math.cos(p["tilt"]), 0.0)), 0.01),
+        min(_spin_bound(p), 5e5 * _pivot_inertia(p) * math.cos(p["tilt"]) / p["I3"]),
+    ),
+    ("mass", "arm", "I1", "I3", "g", "tilt"),
+)
 _AT_REST = "released at rest (theta_dot = phi_dot = 0), as T6 assumes"
 
 
@@ -464,7 +531,7 @@ class HeavyTop(Scenario):
             "I1",
             "kg m^2",
             "transverse principal moment about the CM (the theory adds M arm^2 for the pivot)",
-            Range(1e-9, 1e3),
+            Range(1e-7, 1e3),
             BodyInertia("top", (0, 1)),
         ),
         Param(
@@ -472,11 +539,11 @@ class HeavyTop(Scenario):
             "m",
             "distance h from the pivot to the CM along the symmetry axis; at most sqrt(199 I1 / mass), so that "
             f"I3 can reach (I1 + mass arm^2) / {RHO_MAX:g} (a top, not a spinning pendulum)",
-            Range(1e-6, 10.0),
+            Range(1e-4, 10.0),
             BodyComOffset("top", 2),
             within=Bound(
-                f"[1e-6, sqrt({2 * RHO_MAX - 1:g} I1 / mass)]",
-                lambda p: Range(1e-6, math.sqrt((2 * RHO_MAX - 1) * p["I1"] / p["mass"])),
+                f"[1e-4, sqrt({2 * RHO_MAX - 1:g} I1 / mass)]",
+                lambda p: Range(1e-4, math.sqrt((2 * RHO_MAX - 1) * p["I1"] / p["mass"])),
                 ("I1", "mass"),
             ),
         ),
@@ -500,14 +567,27 @@ class HeavyTop(Scenario):
             Range(1e-6, np.pi - 1e-6),
             Numeric("tilt"),
         ),
-        Param("g", "m/s^2", "gravitational acceleration (along -z)", Range(1e-2, 1e3), Gravity()),
+        Param(
+            "g",
+            "m/s^2",
+            f"gravitational acceleration (along -z); at most what puts the T6 threshold omega_c at {OMEGA_C_MAX:g} "
+            "rad/s, so that the top's rates (up to ~1e6 rad/s, see spin) fit their ranges",
+            Range(1e-2, 1e3),
+            Gravity(),
+            within=Bound(
+                f"[1e-2, g_max], g_max = {OMEGA_C_MAX:g}^2 I3^2 / (4 (I1 + M arm^2) M arm) (omega_c <= "
+                f"{OMEGA_C_MAX:g})",
+                lambda p: Range(1e-2, OMEGA_C_MAX**2 * p["I3"] ** 2 / (4 * _pivot_inertia(p) * p["mass"] * p["arm"])),
+                ("mass", "arm", "I1", "I3"),
+            ),
+        ),
         Param(
             "spin",
             "rad/s",
-            "omega3, angular velocity about the symmetry axis (conserved); at most omega_c / sqrt(2 x 3e-5) in "
+            "omega3, angular velocity about the symmetry axis (conserved); at most S = omega_c / sqrt(2 x 3e-5) in "
             "magnitude, omega_c = 2 sqrt(I1 M g h) / I3 the T6 threshold (beta / a^2 >= 3e-5: a faster top's "
             "nutation and precession sink below round-off)",
-            Range(-1e4, 1e4),
+            RATE_RANGE,
             Numeric("spin"),
             within=Bound(
                 "[-S, S], S = omega_c / sqrt(6e-5) (omega_c = 2 sqrt((I1 + M arm^2) M g arm) / I3)",
@@ -518,11 +598,28 @@ class HeavyTop(Scenario):
         Param(
             "precession",
             "rad/s",
-            "initial phi_dot, rate of the axis about the vertical",
-            Range(-1e4, 1e4),
+            "initial phi_dot, rate of the axis about the vertical; at most 30 S in magnitude (see spin: the fast "
+            "T4 root of fast-precession is below 28.3 S)",
+            RATE_RANGE,
             Numeric("precession"),
+            within=Bound(
+                "[-30 S, 30 S]",
+                lambda p: Range(-30 * _spin_bound(p), 30 * _spin_bound(p)),
+                ("mass", "arm", "I1", "I3", "g"),
+            ),
         ),
-        Param("nutation_rate", "rad/s", "initial theta_dot", Range(-1e4, 1e4), Numeric("nutation_rate")),
+        Param(
+            "nutation_rate",
+            "rad/s",
+            "initial theta_dot; at most S in magnitude (see spin)",
+            RATE_RANGE,
+            Numeric("nutation_rate"),
+            within=Bound(
+                "[-S, S]",
+                lambda p: Range(-_spin_bound(p), _spin_bound(p)),
+                ("mass", "arm", "I1", "I3", "g"),
+            ),
+        ),
     )
     cases = (
         Case(
@@ -531,45 +628,39 @@ class HeavyTop(Scenario):
             "are covered by T2-T3",
             {"tilt": 0.5, "precession": 0.0, "nutation_rate": 0.0},
             _NUTATION,
+            ranges={"tilt": _OFF_VERTICAL},
+            regime=_OFF_VERTICAL_WHY,
         ),
         Case(
             "looping",
             "released with phi_dot = minus the gyroscopic rate: phi_dot changes sign (loops)",
             {"tilt": 0.5, "nutation_rate": 0.0, "precession": lambda p: -_steady(p, 0)},
             (*_NUTATION, "precession-at-theta-min", "precession-at-theta-max"),
+            ranges={"tilt": _OFF_VERTICAL, "spin": _STEADY_SPIN, "nutation_rate": _ZERO},
+            regime="released at rest in theta with phi_dot0 = minus the slow T4 root, which exists for I3^2 omega3^2 "
+            ">= 4 I1 M g h cos(theta0) (as slow-precession): the loop between theta0 and theta_max, whose turning "
+            "points' phi_dot are checked (a theta_dot0 can carry the axis past the vertical, where phi_dot is "
+            f"ill-conditioned; the nutation case takes any); {_OFF_VERTICAL_WHY}",
         ),
         Case(
             "slow-precession",
             "phi_dot at the slow root of T4: theta stays at tilt",
             {"tilt": 0.5, "nutation_rate": 0.0, "precession": lambda p: _steady(p, 0)},
             _STEADY,
-            ranges={
-                "nutation_rate": _ZERO,
-                "spin": Bound(
-                    "[omega_c sqrt(max(cos tilt, 0)), S]",
-                    lambda p: Range(_threshold(p) * math.sqrt(max(math.cos(p["tilt"]), 0.0)), _spin_bound(p)),
-                    ("mass", "arm", "I1", "I3", "g", "tilt"),
-                ),
-            },
+            ranges={"nutation_rate": _ZERO, "tilt": _OFF_VERTICAL, "spin": _STEADY_SPIN},
             regime="steady precession starts with theta_dot = 0, and exists above the horizontal only for "
             "I3^2 omega3^2 >= 4 I1 M g h cos(theta0) (T4); a negative spin mirrors the motion (phi_dot -> "
-            "-phi_dot) and is covered by the nutation case",
+            f"-phi_dot) and is covered by the nutation case; {_OFF_VERTICAL_WHY}",
         ),
         Case(
             "fast-precession",
             "phi_dot at the fast root of T4: theta stays at tilt",
             {"tilt": 0.5, "nutation_rate": 0.0, "precession": lambda p: _steady(p, 1)},
             _STEADY,
-            ranges={
-                "nutation_rate": _ZERO,
-                "spin": Bound(
-                    "[omega_c sqrt(max(cos tilt, 0)), S]",
-                    lambda p: Range(_threshold(p) * math.sqrt(max(math.cos(p["tilt"]), 0.0)), _spin_bound(p)),
-                    ("mass", "arm", "I1", "I3", "g", "tilt"),
-                ),
-            },
-            regime="as slow-precession; the fast root is infinite at theta0 = pi/2, where the step and the "
-            "run follow it",
+            ranges={"nutation_rate": _ZERO, "tilt": Range(_OFF_VERTICAL.low, FAST_TILT), "spin": _FAST_SPIN},
+            regime=f"as slow-precession, above the horizontal (theta0 <= {FAST_TILT:g} rad): the fast root "
+            "(I3 omega3 + sqrt(D)) / (2 I1 cos(theta0)) grows without bound toward it; spin <= 5e5 I1 cos(theta0) / "
+            "I3 keeps the root within 5e5 rad/s",
         ),
         Case(
             "sleeping",
@@ -635,6 +726,9 @@ class HeavyTop(Scenario):
         out = {
             "_theory": top,
             "_steady": steady,
+            "_run_nutations": run_nutations(
+                tilt, tilt_rate, phi_dot0, float(spin), tops.sleeping_threshold(i1, i3, mgh)
+            ),
             "_tilt0": tilt,
             "_energy_scale": 0.5 * float(np.sum(m.inertia_B * m.omega_B[0] ** 2)) + mgh,
             "_momentum_scale": momentum_scale(i1, i3, mgh, transverse0, float(spin)),
@@ -649,6 +743,10 @@ class HeavyTop(Scenario):
             "energy-drift": 0.0,
             "p-phi-drift": 0.0,
             "p-psi-drift": 0.0,
+            "_tolerance": {
+                "theta-min": self.check("theta-min").tolerance
+                * max(1.0, (top.theta_max - top.theta_min) / top.theta_min)
+            },
         }
         if (i3 * spin) ** 2 > 4 * i1 * mgh:
             out["max-tilt-linear"] = tops.sleeping_max_tilt(i1, i3, mgh, spin, tilt)
@@ -661,8 +759,9 @@ class HeavyTop(Scenario):
 
     def duration(self, prediction: Mapping[str, Any]) -> float:
         # Three full nutations (four maxima of theta); for a steady top, three periods of the small nutation about
-        # it (T5; the closed form's period at a double root), over which the precession rate is a slope.
-        return RUN_NUTATIONS * prediction["nutation-period"]
+        # it (T5; the closed form's period at a double root), over which the precession rate is a slope; a falling
+        # top, its first fall (`run_nutations`).
+        return prediction["_run_nutations"] * prediction["nutation-period"]
 
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
         m = self.motion(model, traj.time, traj.qpos, traj.qvel)
@@ -675,11 +774,14 @@ class HeavyTop(Scenario):
         # sin^2(theta) phi_dot = omega1 R31 + omega2 R32 (THEORY.md section 0 inverted), free of the cancellation of
         # (omega_z - omega3 u) / (1 - u^2) near the vertical
         R = m.R_WB
-        sin2 = R[:, 2, 0] ** 2 + R[:, 2, 1] ** 2
-        phi_dot = (m.omega_B[:, 0] * R[:, 2, 0] + m.omega_B[:, 1] * R[:, 2, 1]) / sin2
-        # theta is largest where u is smallest: minima of u are the zero crossings of u_dot going up.
-        t_max, theta_max = signals.extrema(t, theta, -u_dot, "max")
-        t_min, theta_min = signals.extrema(t, theta, -u_dot, "min")
+        sin2_phi_dot = m.omega_B[:, 0] * R[:, 2, 0] + m.omega_B[:, 1] * R[:, 2, 1]  # smooth, unlike phi_dot
+        # theta is largest where u is smallest: minima of u are the zero crossings of u_dot going up. theta at each
+        # from the axis' components interpolated there (smooth where theta(t) has a corner, at a pass near a pole).
+        t_max = signals.crossings(t, -u_dot, -1)
+        t_min = signals.crossings(t, -u_dot, 1)
+        axis_max, axis_min = _axis_at(t, e3, t_max), _axis_at(t, e3, t_min)
+        theta_max = _polar(axis_max)
+        theta_min = _polar(axis_min)
         L_scale = prediction["_momentum_scale"]
         energy = m.kinetic_energy + self._mgh(model) * u
         out = {
@@ -688,14 +790,17 @@ class HeavyTop(Scenario):
                 np.concatenate([theta_min, [theta[0]] if traj.qvel[0, 0] == 0 else []]), prediction["theta-min"]
             ),
             "nutation-period": signals.mean_spacing(t_max),
-            "mean-precession": float(np.diff(signals.interpolate(t, phi, t_max[[0, -1]]))[0] / (t_max[-1] - t_max[0]))
-            if len(t_max) >= 2
-            else float("nan"),
+            "mean-precession": _mean_precession(
+                (t_max, axis_max)
+                if np.sin(prediction["theta-max"]) >= np.sin(prediction["theta-min"])
+                else (t_min, axis_min),
+                prediction["mean-precession"],
+            ),
             "precession-at-theta-min": _worst(
-                signals.interpolate(t, phi_dot, t_min), prediction["precession-at-theta-min"]
+                _phi_dot_at(t, sin2_phi_dot, t_min, axis_min), prediction["precession-at-theta-min"]
             ),
             "precession-at-theta-max": _worst(
-                signals.interpolate(t, phi_dot, t_max), prediction["precession-at-theta-max"]
+                _phi_dot_at(t, sin2_phi_dot, t_max, axis_max), prediction["precession-at-theta-max"]
             ),
             "tilt-deviation": float(np.abs(theta - prediction["_tilt0"]).max()),
             "precession-rate": signals.phase_rate(t, phi),
@@ -725,6 +830,40 @@ class HeavyTop(Scenario):
         if np.count_nonzero(window) < 3:
             return float("nan")
         return float(np.polyfit(t[rise][window], np.log(theta[rise][window]), 1)[0])
+
+
+def _axis_at(t: np.ndarray, e3_W: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The axis e3 (world) at times `at`, each component cubic-interpolated, shape (len(at), 3)."""
+    if len(at) == 0:
+        return np.zeros((0, 3))
+    return np.stack([signals.interpolate(t, e3_W[:, i], at) for i in range(3)], axis=-1)
+
+
+def _phi_dot_at(t: np.ndarray, sin2_phi_dot: np.ndarray, at: np.ndarray, axis_W: np.ndarray) -> np.ndarray:
+    """phi_dot (rad/s) at times `at`: sin^2(theta) phi_dot (smooth) interpolated, over sin^2(theta) of the axes there."""
+    if len(at) == 0:
+        return np.zeros(0)
+    return signals.interpolate(t, sin2_phi_dot, at) / (axis_W[:, 0] ** 2 + axis_W[:, 1] ** 2)
+
+
+def _polar(axis_W: np.ndarray) -> np.ndarray:
+    """theta (rad) of axes (n, 3), from the upward vertical, free of cancellation near either pole."""
+    return np.arctan2(np.hypot(axis_W[:, 0], axis_W[:, 1]), axis_W[:, 2])
+
+
+def _mean_precession(extremes: tuple[np.ndarray, np.ndarray], predicted: float) -> float:
+    """Mean phi_dot (rad/s) between the first and last of a family of extremes of theta (times, axes there): the
+    azimuth of the axis at each, and the whole turns between consecutive ones counted from the `predicted` rate
+    (the azimuth whirls where the axis passes near a pole, and sampled phi cannot be unwrapped there). The family
+    farther from its pole is used (its azimuth the better defined)."""
+    t_ext, axis = extremes
+    if len(t_ext) < 2:
+        return float("nan")
+    az = np.arctan2(axis[:, 0], -axis[:, 1])
+    step = np.diff(az)
+    expected = predicted * np.diff(t_ext)
+    step += 2 * np.pi * np.round((expected - step) / (2 * np.pi))
+    return float(step.sum() / (t_ext[-1] - t_ext[0]))
 
 
 def _worst(values: np.ndarray, expected: float) -> float:
