@@ -356,6 +356,25 @@ def _run_length(p: Mapping[str, Any]) -> str | None:
     return None
 
 
+# MuJoCo flags an acceleration (qacc) above mjMAXVAL = 1e10 as a divergence and resets the state ("Nan, Inf or huge
+# value in QACC"): a real engine limit. The body-frame angular acceleration of the top is at most
+# |I1 - I3| |omega3| |omega_perp|max / I1 + M g h / I1 (Euler's equations, THEORY.md R7, with the gravity torque);
+# refused above a tenth of the limit.
+MAX_ACCELERATION = 1e9
+
+
+def _acceleration(p: Mapping[str, Any]) -> str | None:
+    """Domain test: the largest angular acceleration of the motion stays below MAX_ACCELERATION."""
+    pl = _plan_or_none(p)
+    if pl is None:
+        return None
+    i1 = _pivot_inertia(p)
+    bound = abs(i1 - p["I3"]) * abs(p["spin"]) * pl.scales.transverse / i1 + _mgh(p) / i1
+    if not bound <= MAX_ACCELERATION:
+        return f"{_where(p, *_ALL_NAMES)} (angular accelerations up to {bound:.3g} rad/s^2)"
+    return None
+
+
 # The mean precession is the advance of phi between the first and last theta maxima over the run, known to ~2e-11
 # rad (round-off and interpolation, measured); it must advance by 1.2e-4 rad for that to stay below half the 1e-6
 # tolerance (a planar swing, spin = 0 and phi_dot0 = 0, does not precess at all).
@@ -428,6 +447,14 @@ RATE_RANGE = Range(-1e6, 1e6)
 SIGMA_MIN = 3e-5
 
 DOMAINS = (
+    Domain(
+        "mujoco-max-acceleration",
+        "T1 (MuJoCo: mjMAXVAL = 1e10)",
+        f"angular accelerations |I1 - I3| |omega3| |omega_perp|max / I1 + M g h / I1 <= {MAX_ACCELERATION:g} "
+        "rad/s^2: MuJoCo treats a joint acceleration above mjMAXVAL = 1e10 as a divergence and resets the state "
+        "(an engine limit, not the theory's)",
+        _acceleration,
+    ),
     Domain(
         "run-length",
         "T3 (T_nut = 4 K(k) / sqrt(beta (u3 - u1)))",
@@ -840,7 +867,8 @@ def _axis_at(t: np.ndarray, e3_W: np.ndarray, at: np.ndarray) -> np.ndarray:
 
 
 def _phi_dot_at(t: np.ndarray, sin2_phi_dot: np.ndarray, at: np.ndarray, axis_W: np.ndarray) -> np.ndarray:
-    """phi_dot (rad/s) at times `at`: sin^2(theta) phi_dot (smooth) interpolated, over sin^2(theta) of the axes there."""
+    """phi_dot (rad/s) at times `at`: sin^2(theta) phi_dot (smooth) interpolated, over sin^2(theta) of the axes
+    there."""
     if len(at) == 0:
         return np.zeros(0)
     return signals.interpolate(t, sin2_phi_dot, at) / (axis_W[:, 0] ** 2 + axis_W[:, 1] ** 2)
