@@ -41,17 +41,9 @@ SPIN_TURN = 0.0188
 UNWRAP_TURN = 0.5
 RUN_NUTATIONS = 3.3  # three full nutations: four maxima of theta
 # A top falling from near the upright (released at rest below the T6 threshold at theta0 <= FALLING_TILT, the falling
-# case): its checks need the first fall only (the growth window and the first maximum, at T_nut / 2); the way back
-# up takes as long again, slowly, ~(1/gamma) ln(1/theta0).
+# case) whose three nutations would take more than MAX_STEPS steps runs its first fall only: its checks need no more
+# (the growth window and the first maximum, at T_nut / 2), and the way back up takes as long again.
 FALL_NUTATIONS = 0.6
-
-
-def run_nutations(tilt: float, tilt_rate: float, precession: float, spin: float, threshold: float) -> float:
-    """Nutation periods a run lasts: FALL_NUTATIONS for a falling top (see there), else RUN_NUTATIONS."""
-    falling = tilt <= FALLING_TILT and tilt_rate == 0 and precession == 0 and abs(spin) < threshold
-    return FALL_NUTATIONS if falling else RUN_NUTATIONS
-
-
 MAX_STEPS = 1_000_000
 _RK4 = (
     "RK4 with the step of reference_settings: drift of L and E <= r Omega T (Omega h)^4 / 120 <= 4e-9, errors of "
@@ -303,29 +295,62 @@ def plan(p: Mapping[str, Any]) -> Plan:
     ValueError
         Where the closed form is undefined (mgh <= 0, a tilt outside (0, pi)).
     """
-    top = closed_form(p)
-    transverse0 = float(np.hypot(p["nutation_rate"], p["precession"] * np.sin(p["tilt"])))
-    i1 = _pivot_inertia(p)
-    sc = scales(top, i1, p["I3"], p["spin"], transverse0)
-    duration = run_nutations(p["tilt"], p["nutation_rate"], p["precession"], p["spin"], _threshold(p))
-    duration *= top.nutation_period
-    r = min(1.0, i1 * sc.transverse / momentum_scale(i1, p["I3"], _mgh(p), transverse0, p["spin"]))
+    return reference_run(
+        closed_form(p),
+        _pivot_inertia(p),
+        p["I3"],
+        _mgh(p),
+        tilt=p["tilt"],
+        tilt_rate=p["nutation_rate"],
+        precession=p["precession"],
+        spin=p["spin"],
+    )
+
+
+def reference_run(
+    top: tops.HeavyTop,
+    inertia_pivot: float,
+    inertia_axial: float,
+    mgh: float,
+    *,
+    tilt: float,
+    tilt_rate: float,
+    precession: float,
+    spin: float,
+) -> Plan:
+    """The reference run of the motion `top` (its initial state as `tops.heavy_top` takes it): RUN_NUTATIONS
+    nutation periods (FALL_NUTATIONS for a falling top whose three would exceed MAX_STEPS) at the step of the
+    comment on RK4_TARGET."""
+    i1 = inertia_pivot
+    transverse0 = float(np.hypot(tilt_rate, precession * np.sin(tilt)))
+    sc = scales(top, i1, inertia_axial, spin, transverse0)
+    r = min(1.0, i1 * sc.transverse / momentum_scale(i1, inertia_axial, mgh, transverse0, spin))
     omega = sc.fastest
-    by_rk4 = (120 * RK4_TARGET / (max(r, 1e-300) * omega**5 * duration)) ** 0.25
-    by_resolution = SPIN_TURN / omega
     # phi is unwrapped only for a steady top (its precession rate is a slope); a nutating one's mean precession counts
     # whole turns from the prediction, and need not follow the azimuth's whirl near the vertical
-    steady = p["nutation_rate"] == 0 and top.w_roots[0] - top.w_roots[1] < 1e-12
-    by_unwrap = UNWRAP_TURN / sc.precession if steady and sc.precession > 0 else np.inf
-    limits = {"RK4 drift": by_rk4, "resolution": by_resolution, "azimuth unwrap": by_unwrap}
-    which = min(limits, key=limits.get)
-    h = round_step(limits[which])
+    steady = tilt_rate == 0 and top.w_roots[0] - top.w_roots[1] < 1e-12
+    falling = (
+        tilt <= FALLING_TILT
+        and tilt_rate == 0
+        and precession == 0
+        and abs(spin) < tops.sleeping_threshold(i1, inertia_axial, mgh)
+    )
+    for nutations in (RUN_NUTATIONS, FALL_NUTATIONS) if falling else (RUN_NUTATIONS,):
+        duration = nutations * top.nutation_period
+        by_rk4 = (120 * RK4_TARGET / (max(r, 1e-300) * omega**5 * duration)) ** 0.25
+        by_resolution = SPIN_TURN / omega
+        by_unwrap = UNWRAP_TURN / sc.precession if steady and sc.precession > 0 else np.inf
+        limits = {"RK4 drift": by_rk4, "resolution": by_resolution, "azimuth unwrap": by_unwrap}
+        which = min(limits, key=limits.get)
+        h = round_step(limits[which])
+        if duration / h <= MAX_STEPS:
+            break
     rule = (
         f"min((120 x {RK4_TARGET:g} / (r Omega^5 T))^(1/4), {SPIN_TURN:g} / Omega, {UNWRAP_TURN:g} / "
         f"|phi_dot| if steady) with r = I1 |omega_perp|max / L_scale = {r:.3g}, Omega = max(|omega|max, "
-        f"|I3 - I1| |omega3| / I1, omega_nut, sqrt(beta)) = {omega:.4g} rad/s, T = "
-        f"{duration / top.nutation_period:g} T_nut = {duration:.4g} s: min({by_rk4:.4g}, {by_resolution:.4g}, "
-        f"{by_unwrap:.4g}) s ({which}), rounded down to one digit: {h:.1g} s"
+        f"|I3 - I1| |omega3| / I1, omega_nut, sqrt(beta)) = {omega:.4g} rad/s, T = {nutations:g} T_nut = "
+        f"{duration:.4g} s: min({by_rk4:.4g}, {by_resolution:.4g}, {by_unwrap:.4g}) s ({which}), rounded down to "
+        f"one digit: {h:.1g} s"
     )
     return Plan(top, sc, Derived(h, rule), duration)
 
@@ -458,7 +483,7 @@ DOMAINS = (
     Domain(
         "run-length",
         "T3 (T_nut = 4 K(k) / sqrt(beta (u3 - u1)))",
-        f"{RUN_NUTATIONS:g} nutation periods ({FALL_NUTATIONS:g} for a falling top) in at most {MAX_STEPS:.0e} "
+        f"{RUN_NUTATIONS:g} nutation periods (or the first fall of a falling top) in at most {MAX_STEPS:.0e} "
         "reference steps (the step follows the fastest rate of the motion, its spin at most, the run its "
         "nutation: a top with a long arm, I1 ~ 100 I3, spins ~100 times faster than it nutates)",
         _run_length,
@@ -753,9 +778,10 @@ class HeavyTop(Scenario):
         out = {
             "_theory": top,
             "_steady": steady,
-            "_run_nutations": run_nutations(
-                tilt, tilt_rate, phi_dot0, float(spin), tops.sleeping_threshold(i1, i3, mgh)
-            ),
+            "_run_nutations": reference_run(
+                top, i1, i3, mgh, tilt=tilt, tilt_rate=tilt_rate, precession=phi_dot0, spin=float(spin)
+            ).duration
+            / top.nutation_period,
             "_tilt0": tilt,
             "_energy_scale": 0.5 * float(np.sum(m.inertia_B * m.omega_B[0] ** 2)) + mgh,
             "_momentum_scale": momentum_scale(i1, i3, mgh, transverse0, float(spin)),
@@ -787,7 +813,7 @@ class HeavyTop(Scenario):
     def duration(self, prediction: Mapping[str, Any]) -> float:
         # Three full nutations (four maxima of theta); for a steady top, three periods of the small nutation about
         # it (T5; the closed form's period at a double root), over which the precession rate is a slope; a falling
-        # top, its first fall (`run_nutations`).
+        # top whose three would be too long, its first fall (`reference_run`).
         return prediction["_run_nutations"] * prediction["nutation-period"]
 
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
@@ -923,12 +949,14 @@ class HeavyTopEnv(RotorEnv):
         Tilt ``tilt`` from the upward vertical, rates (nutation_rate, precession sin(tilt), spin) in body axes.
 
     Episode End
-        Truncated after 3.3 nutation periods (two precession turns if steady); terminated on divergence.
+        Truncated after 3.3 nutation periods (of the small nutation about it, T5, if steady; the first fall, 0.6
+        periods, for a falling top whose three would exceed 1e6 steps); terminated on divergence.
 
     Arguments
         ``case`` (nutation, looping, slow-precession, fast-precession, sleeping, falling), ``params`` (mass, arm,
         I1, I3, tilt, spin, precession, nutation_rate, g), ``profile``, ``integrator``, ``timestep``,
-        ``frame_skip`` (default 10, i.e. 1 ms), ``render_mode``.
+        ``frame_skip`` (default 10: 1 ms at the default cases; the reference timestep follows the parameters, see
+        `HeavyTop.reference_settings`), ``render_mode``.
 
     Version History
         v0: initial version.
