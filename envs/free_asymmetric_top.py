@@ -17,10 +17,12 @@ from rigidbench import signals
 from rigidbench.analytic import tops
 from rigidbench.envs.rotor import (
     FREE_INERTIA,
+    MIN_RATE_DOMAIN_TEXT,
     MIN_TURN_PER_STEP,
     OMEGA_PARAM,
     FreeRotorEnv,
     free_body_motion,
+    mujoco_min_rate,
     require_rigid_body_inertia,
     round_step,
     set_free_body_rotation,
@@ -127,11 +129,6 @@ def _where(p: Mapping[str, Any]) -> str:
     return f"I1, I2, I3 = {p['I1']:.10g}, {p['I2']:.10g}, {p['I3']:.10g} kg m^2, omega = {_vec(p['omega'])} rad/s"
 
 
-def _turning(p: Mapping[str, Any]) -> str | None:
-    """Domain test: the body turns (omega != 0)."""
-    return None if np.any(np.asarray(p["omega"], dtype=float)) else "omega = 0,0,0 rad/s (the body does not turn)"
-
-
 def _off_separatrix(p: Mapping[str, Any]) -> str | None:
     """Domain test: the separatrix sensitivity S of the elliptic phase is at most MAX_SEPARATRIX_SENSITIVITY."""
     try:
@@ -140,6 +137,17 @@ def _off_separatrix(p: Mapping[str, Any]) -> str | None:
         sensitivity = np.inf
     if sensitivity > MAX_SEPARATRIX_SENSITIVITY:
         return f"{_where(p)} (separatrix sensitivity S = {sensitivity:.3g})"
+    return None
+
+
+def _off_principal_axis(p: Mapping[str, Any]) -> str | None:
+    """Domain test: the amplitude of omega2 over the motion is at least 1e-9 |omega|."""
+    top = _solution(p)
+    if top is None:
+        return None
+    speed = float(np.linalg.norm(np.asarray(p["omega"], dtype=float)))
+    if not top.amplitudes[1] >= 1e-9 * speed:
+        return f"{_where(p)} (omega2 oscillates by {abs(top.amplitudes[1]):.3g} rad/s)"
     return None
 
 
@@ -175,7 +183,7 @@ MAX_SEPARATRIX_SENSITIVITY = 5e-9 / (5.2 * 2e-14)
 RUN_PERIODS = 2.6
 
 DOMAINS = (
-    Domain("turning", "A1", "omega != 0: a body at rest has no motion to compare", _turning),
+    Domain("mujoco-min-rate", "A1 (MuJoCo: mjMINVAL)", MIN_RATE_DOMAIN_TEXT, mujoco_min_rate),
     Domain(
         "separatrix",
         "A2, A3 (k' -> 0 at the separatrix, L^2 = 2 E I2)",
@@ -185,6 +193,13 @@ DOMAINS = (
         "run's 2.6 periods; beyond, that exceeds half the 1e-8 omega-body tolerance (about 0.9e-2 rad off the "
         "intermediate axis of the default 1 : 2 : 2.5 body)",
         _off_separatrix,
+    ),
+    Domain(
+        "principal-axis",
+        "A2 (omega2 = A2 sn(s t + tau0, k))",
+        "the amplitude A2 of omega2 is >= 1e-9 |omega|: a spin about a principal axis (axis 1 or 3) does not move, "
+        "omega2 has no zero crossings to time (period, flip) and the elliptic phase is 0/0",
+        _off_principal_axis,
     ),
     Domain(
         "resolvable-rates",

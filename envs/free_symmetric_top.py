@@ -17,10 +17,12 @@ from rigidbench.analytic import tops
 from rigidbench.envs.rotor import (
     FREE_INERTIA,
     MAX_FREE_STEPS,
+    MIN_RATE_DOMAIN_TEXT,
     MIN_TURN_PER_STEP,
     OMEGA_PARAM,
     FreeRotorEnv,
     free_body_motion,
+    mujoco_min_rate,
     require_rigid_body_inertia,
     round_step,
     set_free_body_rotation,
@@ -207,6 +209,7 @@ def _vec(v: Any) -> str:
 
 
 DOMAINS = (
+    Domain("mujoco-min-rate", "S1 (MuJoCo: mjMINVAL)", MIN_RATE_DOMAIN_TEXT, mujoco_min_rate),
     Domain(
         "resolvable-rates",
         "S1, S3 (measured as slopes of phases)",

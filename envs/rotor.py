@@ -7,9 +7,10 @@ Turns MuJoCo's raw state rows into named physical quantities with their frames i
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import mujoco
@@ -55,6 +56,27 @@ def round_step(h: float) -> float:
 
 # Most steps of a torque-free run (1.8e5 at the defaults); the rates are slopes of phases and need no whole turns.
 MAX_FREE_STEPS = 200_000
+
+
+# MuJoCo rotates a quaternion by |omega| h about omega / |omega|, and skips the rotation where |omega| < mjMINVAL =
+# 1e-15 (mju_normalize3 returns 0): a body turning slower does not turn in MuJoCo at all (measured: a free top at
+# |omega| = 1e-16 rad/s keeps its orientation, momentum drift 2). Refused below MIN_RATE, which keeps the slowest
+# |omega| along a free motion (>= sqrt(I_min / I_max) of the start) well above it.
+MIN_RATE = 1e-9
+
+
+def mujoco_min_rate(p: Mapping[str, Any]) -> str | None:
+    """Domain test: |omega| >= MIN_RATE (MuJoCo's mjMINVAL, see there)."""
+    speed = float(np.linalg.norm(np.asarray(p["omega"], dtype=float)))
+    if not speed >= MIN_RATE:
+        return f"omega = {','.join(f'{float(x):.10g}' for x in p['omega'])} rad/s (|omega| = {speed:.3g} rad/s)"
+    return None
+
+
+MIN_RATE_DOMAIN_TEXT = (
+    f"|omega| >= {MIN_RATE:g} rad/s: MuJoCo rotates the orientation by |omega| h about omega / |omega| and skips "
+    "the rotation where |omega| < mjMINVAL = 1e-15 rad/s, so a slower body does not turn at all (an engine limit)"
+)
 
 
 def require_rigid_body_inertia(i1: float, i2: float, i3: float, names: str = "I1, I2, I3") -> None:
