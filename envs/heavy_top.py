@@ -25,11 +25,12 @@ from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Bound, Gravi
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.simulate import Trajectory
 
-# Reference timestep (`HeavyTop.reference_settings`, `reference_step`). MuJoCo integrates the body-frame rates of the
-# ball joint: the transverse ones turn in the body frame at the spin psi_dot, and a phase error of RK4 there that
+# Reference timestep (`HeavyTop.reference_settings`, `reference_run`). MuJoCo integrates the body-frame rates of the
+# ball joint, whose transverse part turns in the body frame as the body spins, and a phase error of RK4 there that
 # the quaternion does not share turns the transverse angular momentum I1 omega_perp about the axis. Over a run of T
 # that is a relative error in L (and E) of about
 #     r Omega T (Omega h)^4 / 120,   r = I1 |omega_perp|max / L_scale,   Omega = the fastest rate of the motion
+# (`Scales.fastest`: the largest |omega|, the body-frame precession |I3 - I1| |omega3| / I1, the nutation, sqrt(beta))
 # (measured: 0.001 to 0.75 of it over 40 sets; 0.75 for a slow top swinging through 2.5 rad). The step keeps it at
 # RK4_TARGET = 4e-9, 0.4 of the 1e-8 drift tolerances; it resolves the fastest rate by at least 1 / SPIN_TURN = 53
 # steps a radian (the model file's 1e-4 s at the default spin, 150 rad/s: every rate of the motion, the nutation's

@@ -30,9 +30,10 @@ OMEGA_PARAM = Param(
 )
 
 # Principal moments of the free tops (kg m^2). Their motion depends only on the ratios of the moments (and omega),
-# so the scale is free: four decades below the defaults (~1 kg m^2) to three above. The smallest ratio this allows,
-# 1e-7, keeps MuJoCo's solve for the angular acceleration in world axes (an inertia matrix of condition I_max /
-# I_min) accurate: measured at I3 / I1 = 1e-8, omega-body 5e-11; at 1e-10 its round-off reaches 2e-9.
+# so the scale is free: four decades below the defaults (~1 kg m^2) to three above. MuJoCo solves for the angular
+# acceleration in world axes, with an inertia matrix of condition I_max / I_min (up to 1e7 here): the round-off that
+# puts in the rates is bounded where it matters by the scenarios' domains (measured at I3 / I1 = 1e-8, omega-body
+# 5e-11; at 1e-10, 2e-9; free-symmetric-top keeps I1 / I3 <= 1e3, see its domain 'axial-round-off').
 FREE_INERTIA = Range(1e-4, 1e3)
 
 # The smallest turn per step (rad) of a rate a check measures as a slope: MuJoCo adds each step's change of the state

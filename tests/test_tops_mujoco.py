@@ -176,12 +176,14 @@ def test_near_spherical_symmetric_top_is_refused_where_its_body_rate_turns_below
 
 
 def test_thin_rod_spun_about_a_transverse_axis_is_refused_for_its_axial_round_off():
-    """MuJoCo's world-frame solve with an inertia of condition I1/I3 makes omega3 wander by ~eps (I1/I3) |omega|:
-    a census draw (I1/I3 = 2.1e3, |omega|/|omega3| = 2.4e5) came out 7.5e-8 off in body-rate."""
-    exc = _outside(
-        "free-symmetric-top:oblate",
-        {"I1": 12.380850012085498, "I3": 0.005813119210376483, "omega": (54.95447529624096, 12.06, 2.37e-4)},
-    )
+    """MuJoCo's world-frame solve with an inertia of condition I1/I3 makes omega3 wander by ~eps (I1/I3) |omega|,
+    and Omega_b and the body-frame phase of omega with it: a census draw (I1/I3 = 3.2e4, |omega| / |omega3| = 420)
+    came out 4.0e-8 off in omega-body (the domain's estimate: 4.2e-8). Rods thinner than I1/I3 = 1e3 lie outside
+    I3's range; within it, spins nearly about a transverse axis are refused."""
+    scenario = registry.get("free-symmetric-top")
+    with pytest.raises(ValueError, match="'I3'"):
+        scenario.resolve(scenario.case("oblate"), {"I1": 13.867, "I3": 4.3e-4, "omega": (30.95, -75.06, -0.195)})
+    exc = _outside("free-symmetric-top:oblate", {"I1": 1.0, "I3": 0.002, "omega": (54.95, 12.06, 1e-4)})
     assert exc is not None and exc.domain == "axial-round-off"
 
 
