@@ -48,7 +48,7 @@ _RK4 = (
 )
 _FLIP = (
     "as omega-body; the crossing times are cubic-interpolated (error O(dt^4)); near the separatrix a relative "
-    "error eta of the rates shifts each flip by ~eta S / K of its time (T_rev = 2 K / s, K ~ ln(4/k')), <= 2e-10 "
+    "error eta of the rates shifts each flip by ~eta S / K of its time (T_rev = 2 K / s, K ~ ln(4/k')), <= 6e-10 "
     "(domain 'separatrix')"
 )
 

@@ -161,14 +161,10 @@ def _resolvable(p: Mapping[str, Any]) -> str | None:
     if fastest == 0:
         return "omega = 0,0,0 rad/s (the body does not turn)"
     h = reference_step(p["I1"], p["I3"], p["omega"]).value if body else WORLD_TURN / fastest
-    slow, name = (
-        (abs(body), "|Omega_b| = |I3 - I1| |omega3| / I1")
-        if abs(body) <= precession
-        else (
-            precession,
-            "|L| / I1",
-        )
-    )
+    if abs(body) <= precession:
+        slow, name = abs(body), "|Omega_b| = |I3 - I1| |omega3| / I1"
+    else:
+        slow, name = precession, "|L| / I1"
     if slow * h < MIN_TURN_PER_STEP:
         return (
             f"I1 = {p['I1']:.10g} kg m^2, I3 = {p['I3']:.10g} kg m^2, omega = {_vec(p['omega'])} rad/s "

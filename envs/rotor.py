@@ -55,7 +55,8 @@ def round_step(h: float) -> float:
     return float(f"{math.floor(h / 10.0**e * (1 + 1e-12))}e{e}")
 
 
-# Most steps of a torque-free run (1.8e5 at the defaults); the rates are slopes of phases and need no whole turns.
+# Most steps of a free-symmetric-top run (1.5e5 at the prolate default); the rates are slopes of phases and need no
+# whole turns.
 MAX_FREE_STEPS = 200_000
 
 
