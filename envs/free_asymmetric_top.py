@@ -234,7 +234,7 @@ class FreeAsymmetricTop(Scenario):
             "I1",
             "kg m^2",
             "smallest principal moment about the CM (body x); the motion depends only on the ratios of I1, I2, I3",
-            FREE_INERTIA,
+            Range(FREE_INERTIA.low, FREE_INERTIA.high, high_open=True),  # room for I1 < I2 < I3 <= 1e3
             BodyInertia("top", (0,)),
         ),
         Param(
@@ -244,8 +244,8 @@ class FreeAsymmetricTop(Scenario):
             FREE_INERTIA,
             BodyInertia("top", (1,)),
             within=Bound(
-                "(I1, 1e3] (I1 < I2 < I3; free-symmetric-top for two equal moments)",
-                lambda p: Range(p["I1"], FREE_INERTIA.high, low_open=True),
+                "(I1, 1e3) (I1 < I2 < I3; free-symmetric-top for two equal moments)",
+                lambda p: Range(p["I1"], FREE_INERTIA.high, low_open=True, high_open=True),
                 ("I1",),
             ),
         ),

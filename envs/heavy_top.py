@@ -608,7 +608,7 @@ class HeavyTop(Scenario):
             "I3",
             "kg m^2",
             "principal moment about the symmetry axis; between (I1 + mass arm^2) / 100 (see arm) and 2 I1",
-            Range(1e-11, 1e3),
+            Range(1e-11, 2e3),
             BodyInertia("top", (2,)),
             within=Bound(
                 f"[(I1 + mass arm^2) / {RHO_MAX:g}, 2 I1] (the triangle inequality I3 <= I1 + I2 of every rigid "
