@@ -16,20 +16,40 @@ import numpy as np
 from rigidbench import signals
 from rigidbench.analytic import tops
 from rigidbench.envs.rotor import (
+    FREE_INERTIA,
+    MIN_RATE_DOMAIN_TEXT,
+    MIN_TURN_PER_STEP,
     OMEGA_PARAM,
     FreeRotorEnv,
     free_body_motion,
+    mujoco_min_rate,
     require_rigid_body_inertia,
+    round_step,
     set_free_body_rotation,
 )
-from rigidbench.params import BodyInertia, Param, positive
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.params import BodyInertia, Bound, Param, Range
+from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.simulate import Trajectory
 
-_RK4 = "RK4 at dt = 1e-4 s: global error ~ |omega| T (|omega| dt)^4 ~ 1e-11 over ~30 s; 1e-8 leaves 3 decades"
+# Reference timestep (`FreeAsymmetricTop.reference_settings`): the smaller of two limits, as for the symmetric top.
+# - Body frame: omega_B follows sn, cn, dn of s t (THEORY.md A2), whose slopes in tau = s t are at most 1: s h <=
+#   BODY_TURN = 1.84e-4 rad: RK4's error (s T)(s h)^4 / 120 <~ 1e-15 over a run; rounded down to one digit
+#   (`round_step`) it gives the model file's 1e-4 s at all three default cases (s = 1.84, 1.64, 1.34 rad/s).
+# - World frame: the body turns at |omega|; |omega| h <= WORLD_TURN (envs/free_symmetric_top.py: the orientation's
+#   error grows only with the body-frame change, <= 4e-11 in momentum drift).
+BODY_TURN = 1.84e-4
+WORLD_TURN = 0.03
+# Most steps of a run; a run needs 2.6 periods of omega2 (two upward crossings for the period, five for the flip).
+MAX_STEPS = 1_000_000
+_RK4 = (
+    "RK4 with s h <= 1.84e-4 and |omega| h <= 0.03 (reference_settings): error ~ (s T)(s h)^4 / 120 <~ 1e-15, "
+    "world-frame <= 4e-11; round-off ~1e-12 over <= 1e6 steps, amplified near the separatrix to ~5.2 eta S "
+    "(eta <= 2e-14; S <= 4.8e4, domain 'separatrix')"
+)
 _FLIP = (
-    "as omega-body; the crossing times are cubic-interpolated (error O(dt^4)); near the separatrix a phase "
-    "error grows like exp(lambda t), still << 1e-8 here"
+    "as omega-body; the crossing times are cubic-interpolated (error O(dt^4)); near the separatrix a relative "
+    "error eta of the rates shifts each flip by ~eta S / K of its time (T_rev = 2 K / s, K ~ ln(4/k')), <= 6e-10 "
+    "(domain 'separatrix')"
 )
 
 CHECKS = (
@@ -62,7 +82,8 @@ CHECKS = (
         "1",
         1e-9,
         "abs",
-        "RK4 is not symplectic: drift ~ T |omega| (|omega| dt)^4 ~ 1e-11 at reference; 1e-9 is 2 decades above",
+        "RK4 is not symplectic: drift ~ (s T)(s h)^4 / 120 <~ 1e-15 at reference, round-off <~ 2e-13 over <= 1e6 "
+        "steps; 1e-9 leaves 3 decades",
         "A1: torque-free, E conserved",
     ),
     Check(
@@ -70,33 +91,175 @@ CHECKS = (
         "1",
         1e-9,
         "abs",
-        "as energy-drift, for max |L_W(t) - L_W(0)| / |L|",
+        "world frame: max |L_W(t) - L_W(0)| / |L| <= 4e-11 at reference (|omega| h <= 0.03), round-off <~ 2e-13; "
+        "1e-9 leaves a factor 25",
         "A1: torque-free, L_W conserved",
     ),
 )
 _COMMON = ("omega-body", "period", "energy-drift", "momentum-drift")
 
 
+def _solution(p: Mapping[str, Any]) -> tops.AsymmetricTop | None:
+    """The closed form at the parameters, or None where it is undefined (the domain tests say why)."""
+    try:
+        return tops.asymmetric_top((p["I1"], p["I2"], p["I3"]), p["omega"])
+    except ValueError:
+        return None
+
+
+def reference_step(top: tops.AsymmetricTop, omega: Any) -> Derived:
+    """The reference timestep (s): min(BODY_TURN / s, WORLD_TURN / |omega|), rounded down to one digit."""
+    speed = float(np.linalg.norm(omega))
+    by_body, by_world = BODY_TURN / top.rate, WORLD_TURN / speed
+    h = round_step(min(by_body, by_world))
+    which = "body frame" if by_body <= by_world else "world frame"
+    return Derived(
+        h,
+        f"min({BODY_TURN:g} rad / s, {WORLD_TURN:g} rad / |omega|) = min({BODY_TURN:g} / {top.rate:.4g}, "
+        f"{WORLD_TURN:g} / {speed:.4g}), rounded down to one digit: {h:.1g} s ({which} limit; s = the elliptic "
+        "rate of THEORY.md A2)",
+    )
+
+
+def _vec(v: Any) -> str:
+    return ",".join(f"{float(x):.10g}" for x in v)
+
+
+def _where(p: Mapping[str, Any]) -> str:
+    return f"I1, I2, I3 = {p['I1']:.10g}, {p['I2']:.10g}, {p['I3']:.10g} kg m^2, omega = {_vec(p['omega'])} rad/s"
+
+
+def _off_separatrix(p: Mapping[str, Any]) -> str | None:
+    """Domain test: the separatrix sensitivity S of the elliptic phase is at most MAX_SEPARATRIX_SENSITIVITY."""
+    try:
+        sensitivity = tops.separatrix_sensitivity((p["I1"], p["I2"], p["I3"]), p["omega"])
+    except ValueError:  # on the separatrix to 1e-12 (or a non-increasing body, refused by validate first)
+        sensitivity = np.inf
+    if sensitivity > MAX_SEPARATRIX_SENSITIVITY:
+        return f"{_where(p)} (separatrix sensitivity S = {sensitivity:.3g})"
+    return None
+
+
+def _off_principal_axis(p: Mapping[str, Any]) -> str | None:
+    """Domain test: the amplitude of omega2 over the motion is at least 1e-9 |omega|."""
+    top = _solution(p)
+    if top is None:
+        return None
+    speed = float(np.linalg.norm(np.asarray(p["omega"], dtype=float)))
+    if not top.amplitudes[1] >= 1e-9 * speed:
+        return f"{_where(p)} (omega2 oscillates by {abs(top.amplitudes[1]):.3g} rad/s)"
+    return None
+
+
+def _resolvable(p: Mapping[str, Any]) -> str | None:
+    """Domain test: the body-frame motion turns >= MIN_TURN_PER_STEP per reference step."""
+    top = _solution(p)
+    if top is None:
+        return None
+    h = reference_step(top, p["omega"]).value
+    if top.rate * h < MIN_TURN_PER_STEP:
+        return f"{_where(p)} (s = {top.rate:.3g} rad/s turns {top.rate * h:.2g} rad per reference step of {h:.3g} s)"
+    return None
+
+
+def _run_length(p: Mapping[str, Any]) -> str | None:
+    """Domain test: 2.6 periods of omega2 fit in MAX_STEPS reference steps."""
+    top = _solution(p)
+    if top is None:
+        return None
+    h = reference_step(top, p["omega"]).value
+    steps = RUN_PERIODS * top.period / h
+    if steps > MAX_STEPS:
+        return f"{_where(p)} (2.6 periods of {top.period:.3g} s take {steps:.3g} steps of {h:.3g} s)"
+    return None
+
+
+# Near the separatrix a relative error eta of the body rates moves omega(t) over the run's 2.6 periods by ~5.2 eta S
+# (`tops.separatrix_sensitivity`). Measured: eta <= 2e-14 (round-off over the run; 15 runs at S = 6e2 .. 5e5, 3e-3 to
+# 3e-2 rad off the intermediate axis of five bodies; e.g. omega-body 1e-9 at S = 4.4e4, 9.4e-9 at S = 5.1e5), so
+# S <= 4.8e4 keeps it at half the 1e-8 omega-body tolerance: ~0.9e-2 rad off the intermediate axis of the default
+# body (its intermediate-axis case starts 0.02 rad off, S = 6.9e3).
+MAX_SEPARATRIX_SENSITIVITY = 5e-9 / (5.2 * 2e-14)
+RUN_PERIODS = 2.6
+
+DOMAINS = (
+    Domain("mujoco-min-rate", "A1 (MuJoCo: mjMINVAL)", MIN_RATE_DOMAIN_TEXT, mujoco_min_rate),
+    Domain(
+        "separatrix",
+        "A2, A3 (k' -> 0 at the separatrix, L^2 = 2 E I2)",
+        f"S <= {MAX_SEPARATRIX_SENSITIVITY:.2g}, S = 2 |omega| sum I_i |I_i - I2| A_i / |L^2 - 2 E I2| "
+        "(A_i: amplitudes of omega_i): near the separatrix the period 4 K(k) / s grows like ln(4/k') and a "
+        "relative error eta of the body rates (round-off, <= 2e-14 measured) moves omega(t) by ~5.2 eta S over the "
+        "run's 2.6 periods; beyond, that exceeds half the 1e-8 omega-body tolerance (about 0.9e-2 rad off the "
+        "intermediate axis of the default 1 : 2 : 2.5 body)",
+        _off_separatrix,
+    ),
+    Domain(
+        "principal-axis",
+        "A2 (omega2 = A2 sn(s t + tau0, k))",
+        "the amplitude A2 of omega2 is >= 1e-9 |omega|: a spin about a principal axis (axis 1 or 3) does not move, "
+        "omega2 has no zero crossings to time (period, flip) and the elliptic phase is 0/0",
+        _off_principal_axis,
+    ),
+    Domain(
+        "resolvable-rates",
+        "A2 (measured from omega_B(t))",
+        f"the elliptic rate s turns by >= {MIN_TURN_PER_STEP:.2g} rad per reference step: MuJoCo rounds each "
+        "step's change of the state to an ulp, so a body-frame motion that turns x rad per step is known only to "
+        "eps/x relative (a nearly symmetric body spun nearly about its symmetry axis lies beyond)",
+        _resolvable,
+    ),
+    Domain(
+        "run-length",
+        "A2 (period 4 K(k) / s)",
+        f"2.6 periods of omega2 in at most {MAX_STEPS:.0e} reference steps (the period and the flip time need "
+        "two upward crossings and five crossings of omega2)",
+        _run_length,
+    ),
+)
+
+
 class FreeAsymmetricTop(Scenario):
     """A free rigid body with three different principal moments: stable spins about the largest and smallest
-    axes, and the intermediate-axis flip (tennis-racket effect), against the exact elliptic solution."""
+    axes, and the intermediate-axis flip (tennis-racket effect), against the exact elliptic solution.
+
+    The cases name their default start; an omega set by hand may put the polhode about either axis, and every
+    check holds in both regimes (THEORY.md A2: omega2 = A2 sn(s t + tau0, k) in both)."""
 
     slug = "free-asymmetric-top"
     title = "Torque-free asymmetric top (stable axes and the intermediate-axis flip)"
     env_id = "rigidbench/FreeAsymmetricTop-v0"
     params = (
         Param(
-            "I1", "kg m^2", "smallest principal moment about the CM (body x)", positive(1e3), BodyInertia("top", (0,))
+            "I1",
+            "kg m^2",
+            "smallest principal moment about the CM (body x); the motion depends only on the ratios of I1, I2, I3",
+            Range(FREE_INERTIA.low, FREE_INERTIA.high, high_open=True),  # room for I1 < I2 < I3 <= 1e3
+            BodyInertia("top", (0,)),
         ),
         Param(
             "I2",
             "kg m^2",
             "intermediate principal moment about the CM (body y)",
-            positive(1e3),
+            FREE_INERTIA,
             BodyInertia("top", (1,)),
+            within=Bound(
+                "(I1, 1e3) (I1 < I2 < I3; free-symmetric-top for two equal moments)",
+                lambda p: Range(p["I1"], FREE_INERTIA.high, low_open=True, high_open=True),
+                ("I1",),
+            ),
         ),
         Param(
-            "I3", "kg m^2", "largest principal moment about the CM (body z)", positive(1e3), BodyInertia("top", (2,))
+            "I3",
+            "kg m^2",
+            "largest principal moment about the CM (body z)",
+            FREE_INERTIA,
+            BodyInertia("top", (2,)),
+            within=Bound(
+                "(I2, I1 + I2] (I2 < I3, and the triangle inequality I3 <= I1 + I2 of every rigid body)",
+                lambda p: Range(p["I2"], p["I1"] + p["I2"], low_open=True),
+                ("I1", "I2"),
+            ),
         ),
         OMEGA_PARAM,
     )
@@ -121,6 +284,7 @@ class FreeAsymmetricTop(Scenario):
         ),
     )
     checks = CHECKS
+    domains = DOMAINS
 
     def validate(self, params: Mapping[str, Any]) -> None:
         i1, i2, i3 = params["I1"], params["I2"], params["I3"]
@@ -130,16 +294,10 @@ class FreeAsymmetricTop(Scenario):
                 "(use free-symmetric-top for two equal moments)"
             )
         require_rigid_body_inertia(i1, i2, i3)
-        w = np.asarray(params["omega"])
-        inertia = np.array([i1, i2, i3])
-        two_e, l2 = np.sum(inertia * w**2), np.sum((inertia * w) ** 2)
-        if not np.any(w):
-            raise ValueError("parameter 'omega' = 0,0,0 rad/s: the body must turn")
-        if abs(l2 - two_e * i2) <= 1e-9 * l2:
-            raise ValueError(
-                f"parameter 'omega' = {','.join(f'{x:g}' for x in w)} rad/s lies on the separatrix L^2 = 2 E I2 "
-                "(infinite period): tilt it off the intermediate axis"
-            )
+
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        top = _solution(params)
+        return {} if top is None else {"timestep": reference_step(top, params["omega"])}
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         set_free_body_rotation(data, params["omega"])
@@ -157,7 +315,7 @@ class FreeAsymmetricTop(Scenario):
         }
 
     def duration(self, prediction: Mapping[str, Any]) -> float:
-        return 2.6 * prediction["_theory"].period  # at least two full periods of omega2, i.e. five flips
+        return RUN_PERIODS * prediction["_theory"].period  # at least two full periods of omega2, i.e. five flips
 
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
         top = prediction["_theory"]
@@ -199,7 +357,9 @@ class FreeAsymmetricTopEnv(FreeRotorEnv):
 
     Arguments
         ``case`` (``major-axis``, ``minor-axis``, ``intermediate-axis``), ``params`` (``I1``, ``I2``, ``I3``,
-        ``omega``), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10), ``render_mode``.
+        ``omega``), ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10: 1 ms at
+        the default cases; the reference timestep follows I1, I2, I3 and omega, see
+        `FreeAsymmetricTop.reference_settings`), ``render_mode``.
 
     Version History
         v0: initial version.

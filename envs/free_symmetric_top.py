@@ -15,19 +15,39 @@ import numpy as np
 from rigidbench import frames, signals
 from rigidbench.analytic import tops
 from rigidbench.envs.rotor import (
+    FREE_INERTIA,
+    MAX_FREE_STEPS,
+    MIN_RATE_DOMAIN_TEXT,
+    MIN_TURN_PER_STEP,
     OMEGA_PARAM,
     FreeRotorEnv,
     free_body_motion,
+    mujoco_min_rate,
     require_rigid_body_inertia,
+    round_step,
     set_free_body_rotation,
 )
-from rigidbench.params import BodyInertia, Param, positive
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.params import BodyInertia, Bound, Param, Range
+from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.simulate import Trajectory
 
-# Reference settings (models/free_symmetric_top.xml): RK4, dt = 1e-4 s, |omega| <= ~5 rad/s, runs of ~15 s.
-# RK4's global error ~ |omega| T (|omega| dt)^4 ~ 5e-12 relative; round-off over ~1.5e5 steps adds ~1e-12.
-_RK4 = "RK4 at dt = 1e-4 s: global error ~ |omega| T (|omega| dt)^4 ~ 1e-11; 1e-8 leaves 3 decades of margin"
+# Reference timestep (`FreeSymmetricTop.reference_settings`): the smaller of two limits.
+# - Body frame: omega circles e3 at Omega_b = (I3 - I1) omega3 / I1, and RK4's relative error in that rate is
+#   (Omega_b h)^4 / 120. BODY_TURN = 3.51e-4 rad per step: a relative error <= 1.3e-16, below round-off; rounded
+#   down to one digit (`round_step`) it gives the model file's 1e-4 s at both default cases (|Omega_b| = 3 and
+#   3.5 rad/s).
+# - World frame: the body turns at |omega| and its axis precesses about L at |L| / I1 (up to 2 |omega|, oblate).
+#   MuJoCo's quaternion step is exact while omega_B is constant, so the orientation's error grows only with the
+#   body-frame change: WORLD_TURN = 0.03 rad per step keeps the world-frame checks (precession-rate, spin-rate,
+#   momentum-drift) at <= 4e-11 (measured; it grows like WORLD_TURN^4) where Omega_b h = BODY_TURN, the largest
+#   body-frame change a world-limited step meets (test_world_limited_timestep_keeps_the_world_frame_checks).
+BODY_TURN = 3.51e-4
+WORLD_TURN = 0.03
+_RK4 = (
+    "RK4 with Omega_b h <= 3.51e-4 and max(|omega|, |L|/I1) h <= 0.03 (reference_settings): relative rate error "
+    "(Omega_b h)^4/120 <= 1.3e-16, world-frame error <= 4e-11, round-off ~1e-12 over <= 2e5 steps; a rate that "
+    "turns >= 4.4e-8 rad per step is rounded to <= 5e-9 (domain 'resolvable-rates')"
+)
 
 CHECKS = (
     Check(
@@ -91,7 +111,8 @@ CHECKS = (
         "1",
         1e-9,
         "abs",
-        "RK4 is not symplectic: drift ~ T |omega| (|omega| dt)^4 ~ 1e-11 at reference; 1e-9 is 2 decades above",
+        "RK4 is not symplectic: drift ~ (Omega_b T) (Omega_b h)^4 / 120 <~ 1e-14 at reference, round-off ~1e-14 over "
+        "<= 2e5 steps; 1e-9 leaves 4 decades",
         "R2/R7: torque-free, E conserved",
     ),
     Check(
@@ -99,11 +120,141 @@ CHECKS = (
         "1",
         1e-9,
         "abs",
-        "as energy-drift, for max |L_W(t) - L_W(0)| / |L|",
+        "world frame: max |L_W(t) - L_W(0)| / |L| <= 4e-11 at reference (the timestep rule above), round-off "
+        "~1e-13; 1e-9 leaves a factor 25",
         "R7: torque-free, L_W conserved",
     ),
 )
 _ALL = tuple(c.name for c in CHECKS)
+
+
+def rates(i1: float, i3: float, omega: Any) -> tuple[float, float, float]:
+    """(Omega_b, |L| / I1, max(|omega|, |L| / I1)) in rad/s: the body-frame precession, the precession of e3 about L
+    (THEORY.md S1, S3) and the fastest turning rate of the motion."""
+    w1, w2, w3 = (float(x) for x in omega)
+    body = (i3 - i1) * w3 / i1
+    precession = float(np.sqrt(w1 * w1 + w2 * w2 + (i3 * w3 / i1) ** 2))
+    return body, precession, max(float(np.sqrt(w1 * w1 + w2 * w2 + w3 * w3)), precession)
+
+
+def reference_step(i1: float, i3: float, omega: Any) -> Derived:
+    """The reference timestep (s): min(BODY_TURN / |Omega_b|, WORLD_TURN / max(|omega|, |L| / I1)), rounded down to
+    one digit."""
+    body, _precession, fastest = rates(i1, i3, omega)
+    by_body = BODY_TURN / abs(body) if body else np.inf
+    by_world = WORLD_TURN / fastest
+    h = round_step(min(by_body, by_world))
+    which = "body frame" if by_body <= by_world else "world frame"
+    return Derived(
+        h,
+        f"min({BODY_TURN:g} rad / |Omega_b|, {WORLD_TURN:g} rad / max(|omega|, |L|/I1)) = "
+        f"min({BODY_TURN:g} / {abs(body):.4g}, {WORLD_TURN:g} / {fastest:.4g}), rounded down to one digit: "
+        f"{h:.1g} s ({which} limit)",
+    )
+
+
+def _resolvable(p: Mapping[str, Any]) -> str | None:
+    """Domain test: the slower measured rate turns by at least MIN_TURN_PER_STEP per reference step."""
+    if not (np.isfinite(p["I1"]) and np.isfinite(p["I3"])):
+        return None
+    body, precession, fastest = rates(p["I1"], p["I3"], p["omega"])
+    if fastest == 0:
+        return "omega = 0,0,0 rad/s (the body does not turn)"
+    h = reference_step(p["I1"], p["I3"], p["omega"]).value if body else WORLD_TURN / fastest
+    if abs(body) <= precession:
+        slow, name = abs(body), "|Omega_b| = |I3 - I1| |omega3| / I1"
+    else:
+        slow, name = precession, "|L| / I1"
+    if slow * h < MIN_TURN_PER_STEP:
+        return (
+            f"I1 = {p['I1']:.10g} kg m^2, I3 = {p['I3']:.10g} kg m^2, omega = {_vec(p['omega'])} rad/s "
+            f"({name} = {slow:.3g} rad/s turns {slow * h:.2g} rad per reference step of {h:.3g} s)"
+        )
+    return None
+
+
+def _precessing(p: Mapping[str, Any]) -> str | None:
+    """Domain test: a transverse part of omega of at least 1e-6 |omega3|."""
+    w1, w2, w3 = (float(x) for x in p["omega"])
+    if np.hypot(w1, w2) < 1e-6 * abs(w3):
+        return f"omega = {_vec(p['omega'])} rad/s (transverse part {np.hypot(w1, w2):.3g} rad/s)"
+    return None
+
+
+# MuJoCo solves for the angular acceleration in world axes, with an inertia matrix of condition
+# kappa = max(I1/I3, I3/I1): the axial rate omega3 then wanders by ~eps kappa |omega| (measured 5e-13 |omega| at
+# kappa = 2.1e3, |omega| = 56 rad/s, over 2e5 steps; 1e-2 of that at kappa = 21), which Omega_b = (I3 - I1) omega3 / I1
+# inherits relative to |omega3|: eps_b = eps kappa |omega| / |omega3|. The body-frame phase of omega then drifts by
+# eps_b Omega_b T over the run, moving omega(t) by (A / |omega|) eps_b |Omega_b| T relative to |omega| (measured:
+# 4.0e-8 where this estimate gives 4.2e-8, kappa = 3.2e4). Refused where either exceeds half the 1e-8 tolerances.
+AXIAL_ROUND_OFF_LIMIT = 5e-9
+# The thinnest rod covered, I3 >= I1 / MAX_INERTIA_RATIO (a uniform rod ~77 radii long): beyond, the axial round-off
+# above refuses most spins off the symmetry axis (9 % of a census's draws with the ratio free, 0.8 % with it <= 1e3).
+MAX_INERTIA_RATIO = 1e3
+
+
+def run_duration(body_rate: float, precession_rate: float, step: float) -> float:
+    """Simulated time (s): five turns of the slower of Omega_b and |L| / I1, at most MAX_FREE_STEPS reference steps
+    (the rates are slopes of unwrapped phases and need no whole turns; domain 'resolvable-rates' bounds their
+    rounding per step)."""
+    slowest = min(abs(body_rate), precession_rate)
+    return min(5 * 2 * np.pi / slowest, MAX_FREE_STEPS * step)
+
+
+def _axial_round_off(p: Mapping[str, Any]) -> str | None:
+    """Domain test: eps_b max(1, (A / |omega|) |Omega_b| T) <= AXIAL_ROUND_OFF_LIMIT (see there)."""
+    w = np.asarray(p["omega"], dtype=float)
+    speed = float(np.linalg.norm(w))
+    if w[2] == 0 or speed == 0:
+        return None  # domains 'resolvable-rates' and 'mujoco-min-rate' refuse these
+    kappa = max(p["I1"] / p["I3"], p["I3"] / p["I1"])
+    eps_b = float(np.finfo(float).eps) * kappa * speed / abs(w[2])
+    body, precession, _fastest = rates(p["I1"], p["I3"], w)
+    if body == 0:
+        return None
+    phase = abs(body) * run_duration(body, precession, reference_step(p["I1"], p["I3"], w).value)
+    error = eps_b * max(1.0, float(np.hypot(w[0], w[1])) / speed * phase)
+    if error > AXIAL_ROUND_OFF_LIMIT:
+        return (
+            f"I1 = {p['I1']:.10g} kg m^2, I3 = {p['I3']:.10g} kg m^2, omega = {_vec(p['omega'])} rad/s "
+            f"(round-off of Omega_b and of omega(t) up to {error:.2g})"
+        )
+    return None
+
+
+def _vec(v: Any) -> str:
+    return ",".join(f"{float(x):.10g}" for x in v)
+
+
+DOMAINS = (
+    Domain("mujoco-min-rate", "S1 (MuJoCo: mjMINVAL)", MIN_RATE_DOMAIN_TEXT, mujoco_min_rate),
+    Domain(
+        "resolvable-rates",
+        "S1, S3 (measured as slopes of phases)",
+        f"the slower of Omega_b and |L|/I1 turns by >= {MIN_TURN_PER_STEP:.2g} rad per reference step: MuJoCo "
+        "rounds each step's change of the state to an ulp, so a rate that turns x rad per step is known only to "
+        "eps/x relative (a near-spherical top, |I3 - I1| << I1, or a spin omega3 -> 0 lies beyond); the run "
+        "holds at most 2e5 steps",
+        _resolvable,
+    ),
+    Domain(
+        "axial-round-off",
+        "S1 (Omega_b from omega3)",
+        f"eps_b max(1, (A / |omega|) |Omega_b| T) <= {AXIAL_ROUND_OFF_LIMIT:g}, eps_b = eps kappa |omega| / |omega3|, "
+        "kappa = max(I1/I3, I3/I1): MuJoCo solves for the angular acceleration in world axes, where the inertia "
+        "has condition kappa, so omega3 wanders by ~eps kappa |omega| (measured), Omega_b = (I3 - I1) omega3 / I1 "
+        "by eps_b relative, and the body-frame phase of omega by eps_b |Omega_b| T over the run; beyond, that "
+        "exceeds half the 1e-8 tolerances (a thin rod, I3 << I1, spun nearly about a transverse axis)",
+        _axial_round_off,
+    ),
+    Domain(
+        "precessing",
+        "S1, S2",
+        "transverse part sqrt(omega1^2 + omega2^2) >= 1e-6 |omega3|: below, omega lies on the symmetry axis to "
+        "round-off and the body-frame phase of omega is undefined",
+        _precessing,
+    ),
+)
 
 
 class FreeSymmetricTop(Scenario):
@@ -117,16 +268,23 @@ class FreeSymmetricTop(Scenario):
         Param(
             "I1",
             "kg m^2",
-            "transverse principal moment I1 = I2 about the CM",
-            positive(1e3),
+            "transverse principal moment I1 = I2 about the CM (the motion depends only on I3 / I1)",
+            FREE_INERTIA,
             BodyInertia("top", (0, 1)),
         ),
         Param(
             "I3",
             "kg m^2",
             "principal moment about the symmetry axis (body z), about the CM",
-            positive(1e3),
+            FREE_INERTIA,
             BodyInertia("top", (2,)),
+            within=Bound(
+                f"[I1 / {MAX_INERTIA_RATIO:g}, 2 I1] (the triangle inequality I3 <= I1 + I2 of every rigid body; a rod "
+                "thinner than I3 = I1 / 1000 makes MuJoCo's axial rate wander by eps (I1 / I3) |omega|, see the "
+                "domain 'axial-round-off')",
+                lambda p: Range(max(FREE_INERTIA.low, p["I1"] / MAX_INERTIA_RATIO), 2 * p["I1"]),
+                ("I1",),
+            ),
         ),
         OMEGA_PARAM,
     )
@@ -145,18 +303,13 @@ class FreeSymmetricTop(Scenario):
         ),
     )
     checks = CHECKS
+    domains = DOMAINS
 
     def validate(self, params: Mapping[str, Any]) -> None:
-        i1, i3 = params["I1"], params["I3"]
-        require_rigid_body_inertia(i1, i1, i3, "I1 = I2, I3")
-        if abs(i3 - i1) <= 1e-9 * i1:
-            raise ValueError(f"parameters I1 = I3 = {i1:g} kg m^2: a spherical top has no precession to measure")
-        w1, w2, w3 = params["omega"]
-        if np.hypot(w1, w2) < 1e-6 * max(abs(w3), 1e-300) or w3 == 0:
-            raise ValueError(
-                f"parameter 'omega' = {w1:g},{w2:g},{w3:g} rad/s: needs a nonzero spin omega3 and a transverse "
-                "part (omega1, omega2) of at least 1e-6 |omega3|, or there is no precession to measure"
-            )
+        require_rigid_body_inertia(params["I1"], params["I1"], params["I3"], "I1 = I2, I3")
+
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        return {"timestep": reference_step(params["I1"], params["I3"], params["omega"])}
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         set_free_body_rotation(data, params["omega"])
@@ -176,14 +329,14 @@ class FreeSymmetricTop(Scenario):
             "space-cone": 0.0,
             "energy-drift": 0.0,
             "momentum-drift": 0.0,
+            "_reference_step": reference_step(i1, i3, motion.omega_B[0]).value,
         }
 
     def duration(self, prediction: Mapping[str, Any]) -> float:
+        # `run_duration`, at the reference step, not the simulated one, so that a timestep sweep compares runs of the
+        # same length.
         top = prediction["_theory"]
-        slowest = min(abs(top.body_rate), top.precession_rate)
-        # Five turns of the slower precession, at most 20 s: the rates are slopes of unwrapped phases and
-        # need no whole turns, and a slow precession (omega3 -> 0) must not cost millions of steps.
-        return min(5 * 2 * np.pi / slowest, 20.0)
+        return run_duration(top.body_rate, top.precession_rate, prediction["_reference_step"])
 
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
         top = prediction["_theory"]
@@ -238,12 +391,14 @@ class FreeSymmetricTopEnv(FreeRotorEnv):
         The case's (or the given) ``omega`` in body axes, body unrotated at the origin. Deterministic.
 
     Episode End
-        Truncated after five turns of the slower precession, at most 20 s (the validation run's duration);
-        terminated only if the simulation diverges (``info["diverged"] = True``).
+        Truncated after five turns of the slower precession, at most 2e5 reference steps (the validation run's
+        duration); terminated only if the simulation diverges (``info["diverged"] = True``).
 
     Arguments
         See `ScenarioEnv`: ``case`` (``prolate``, ``oblate``), ``params`` (``I1``, ``I3``, ``omega``),
-        ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e. 1 ms), ``render_mode``.
+        ``profile``, ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e. 1 ms at the
+        prolate default: the reference timestep follows I1, I3 and omega, see `FreeSymmetricTop.reference_settings`),
+        ``render_mode``.
 
     Version History
         v0: initial version.

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import mujoco
@@ -19,21 +20,73 @@ import numpy as np
 
 from rigidbench import frames, signals
 from rigidbench.analytic import tops
-from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia
-from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Gravity, Numeric, Param, Range, positive
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia, round_step
+from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Bound, Gravity, Numeric, Param, Range
+from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.simulate import Trajectory
 
-# Reference: RK4 at dt = 1e-4 s; the nutation (~60 rad/s at the default spin) is the fastest scale that
-# theta and phi see, so omega dt ~ 6e-3 and RK4's global error ~ omega T (omega dt)^4 ~ 1e-7 at worst over a
-# few seconds; event times and extreme values are cubic-interpolated, error O(dt^4).
-_RK4 = "RK4 at dt = 1e-4 s: global error ~ omega_nut T (omega_nut dt)^4 <~ 1e-7 over the run; events cubic-interpolated"
-_DRIFT = "RK4 is not symplectic: drift ~ T omega (omega dt)^4 ~ 1e-10 at reference; 1e-8 is 2 decades above"
-_LINEAR = "linearised in theta (T6): relative error O(theta^2), <= 1e-4 here (theta <= 1e-2 rad)"
+# Reference timestep (`HeavyTop.reference_settings`, `reference_run`). MuJoCo integrates the body-frame rates of the
+# ball joint, whose transverse part turns in the body frame as the body spins, and a phase error of RK4 there that
+# the quaternion does not share turns the transverse angular momentum I1 omega_perp about the axis. Over a run of T
+# that is a relative error in L (and E) of about
+#     r Omega T (Omega h)^4 / 120,   r = I1 |omega_perp|max / L_scale,   Omega = the fastest rate of the motion
+# (`Scales.fastest`: the largest |omega|, the body-frame precession |I3 - I1| |omega3| / I1, the nutation, sqrt(beta))
+# (measured: at most 0.09 of it, scaling as h^4, over 114 census draws and slow tops swinging through 2.9 rad). The
+# step keeps it at RK4_TARGET = 4e-9, 0.4 of the 1e-8 drift tolerances; it resolves the fastest rate by at least
+# 1 / SPIN_TURN = 53 steps a radian (the model file's 1e-4 s at the default spin, 150 rad/s: every rate of the motion,
+# the nutation's cubic-interpolated events included, with an RK4 phase error (Omega h)^4 / 120 <= 1e-9 a radian)
+# and the azimuth of a steady top by at most UNWRAP_TURN = 0.5 rad a step (to unwrap phi). Rounded down to one digit
+# it is the model file's 1e-4 s at the default cases (the fast-precession one: 7e-5 s, its RK4 bound).
+RK4_TARGET = 4e-9
+SPIN_TURN = 0.0188
+UNWRAP_TURN = 0.5
+RUN_NUTATIONS = 3.3  # three full nutations: four maxima of theta
+# A top falling from near the upright (released at rest below the T6 threshold at theta0 <= FALLING_TILT, the falling
+# case) whose three nutations would take more than MAX_STEPS steps runs its first fall only: its checks need no more
+# (the growth window and the first maximum, at T_nut / 2), and the way back up takes as long again.
+FALL_NUTATIONS = 0.6
+MAX_STEPS = 1_000_000
+_RK4 = (
+    "RK4 with the step of reference_settings: drift of L and E <= r Omega T (Omega h)^4 / 120 <= 4e-9, errors of "
+    "theta and phi of the same order; Omega h <= 0.0188, events cubic-interpolated to ~(Omega h)^4 / 384 <~ 3e-10"
+)
+_EXTREMA = (
+    " (the axis at each extremum of theta, at the zero crossings of u_dot, its components cubic-interpolated: an "
+    "absolute error ~(Omega h)^4 / 384 rad, also where the axis passes near the vertical and theta(t) has a corner)"
+)
+# theta_min is checked relative to itself down to THETA_FLOOR (rad), and in absolute terms (1e-6 x THETA_FLOOR) below:
+# an axis passing within THETA_FLOOR of the vertical is located to (Omega h)^4 / 384 <= 3.3e-10 rad (SPIN_TURN), not
+# to a fraction of its distance from the vertical.
+THETA_FLOOR = 1e-3
+_DRIFT = (
+    "RK4 is not symplectic: drift <= r Omega T (Omega h)^4 / 120 <= 4e-9 at the reference step (the rule above; "
+    "measured <= 0.09 of the bound), round-off <~ 1e-13 over <= 1e6 steps; 1e-8 leaves a factor 2.5 over the bound"
+)
+# The linearised sleeping top (T6): released at rest from theta0 it tilts to theta0 (s+ + s-)/(s+ - s-) up to
+# O(theta0^2). At 1.5x the threshold spin the problem in units of a = I3 omega3 / I1 depends only on theta0 (beta /
+# a^2 = 2/9), and the exact cubic (T2) puts the relative error at 0.147 theta0^2: theta0 <= 0.026 rad keeps it below
+# 1e-4, a tenth of the check's tolerance (domain 'linear-max-tilt' computes it exactly for any spin).
+SLEEPING_TILT = 0.026
+LINEAR_ERROR = 1e-4
+_LINEAR = (
+    "linearised in theta (T6): relative error 0.147 theta0^2 at 1.5x the threshold spin, <= 1e-4 in the case's "
+    "regime (theta0 <= 0.026 rad; the domain 'linear-max-tilt' computes it exactly from the cubic T2)"
+)
+# The falling top (T6): ln(theta) is fitted over theta in [20, 100] theta0, where the nonlinear terms O(theta^2)
+# are <= (100 theta0)^2 <= 1e-4 for theta0 <= 1e-4 rad.
+FALLING_TILT = 1e-4
 
 CHECKS = (
-    Check("theta-min", "rad", 1e-6, "rel", _RK4, "T2: theta_min = arccos(u2), roots of the cubic f(u)"),
-    Check("theta-max", "rad", 1e-6, "rel", _RK4, "T2: theta_max = arccos(u1), roots of the cubic f(u)"),
+    Check(
+        "theta-min",
+        "rad",
+        1e-6,
+        "rel",
+        _RK4 + _EXTREMA + "; relative to max(theta_min, 1e-3 rad): near the vertical theta_min is the axis' distance "
+        "from it, known to the axis' absolute accuracy (Omega h)^4 / 384 <= 3.3e-10 rad, a third of 1e-6 x 1e-3 rad",
+        "T2: theta_min = arccos(u2), roots of the cubic f(u)",
+    ),
+    Check("theta-max", "rad", 1e-6, "rel", _RK4 + _EXTREMA, "T2: theta_max = arccos(u1), roots of the cubic f(u)"),
     Check(
         "nutation-period",
         "s",
@@ -47,7 +100,9 @@ CHECKS = (
         "rad/s",
         1e-6,
         "rel",
-        _RK4 + " (phi advance between the first and last theta maxima)",
+        _RK4 + " (phi advance between the first and last theta maxima: the azimuth of the axis at each maximum, "
+        "cubic-interpolated, its whole turns in between counted from the prediction, which only an error over "
+        "pi rad per nutation could miscount)",
         "T3: Delta phi / T_nut, phi_dot = (b - a u)/(1 - u^2) over one nutation period",
     ),
     Check(
@@ -88,7 +143,7 @@ CHECKS = (
         "rad",
         1e-3,
         "rel",
-        _LINEAR.replace("<= 1e-4", "~ theta0^2 = 1e-4"),
+        _LINEAR,
         "T6: theta_max = theta0 I3 omega3 / sqrt(I3^2 omega3^2 - 4 I1 M g h) (sleeping top, Wilcox prob. 11.13)",
     ),
     Check(
@@ -96,15 +151,36 @@ CHECKS = (
         "1/s",
         1e-3,
         "rel",
-        "slope of ln(theta) fitted over theta in [20, 100] theta0 (theta0 = 1e-4 rad): the decaying mode "
-        "biases it by ~2 e^(-2 gamma t) <= 1e-3 at the window's start, ~2e-4 on average; nonlinear terms "
-        "O(theta^2) <= 1e-4",
+        "slope of ln(theta) fitted over theta in [20, 100] theta0 (theta0 <= 1e-4 rad): the decaying mode "
+        "biases it by ~2 e^(-2 gamma t) <= 1e-3 at the window's start, 2.2e-4 measured at |spin| = 0.5x the "
+        "threshold (less below; domain 'falling'); nonlinear terms O(theta^2) <= (100 theta0)^2 <= 1e-4",
         "T6: gamma = sqrt(4 I1 M g h - I3^2 omega3^2) / (2 I1); linearised theta = theta0 "
         "sqrt(cosh^2(gamma t) + (a/2 gamma)^2 sinh^2(gamma t))",
     ),
-    Check("energy-drift", "1", 1e-8, "abs", _DRIFT, "T1: E conserved (frictionless pivot)"),
-    Check("p-phi-drift", "1", 1e-8, "abs", _DRIFT + " (relative to |L|)", "T1: p_phi = L_z conserved, eq. 11.61"),
-    Check("p-psi-drift", "1", 1e-8, "abs", _DRIFT, "T1: p_psi = I3 omega3 conserved, eq. 11.62"),
+    Check(
+        "energy-drift",
+        "1",
+        1e-8,
+        "abs",
+        _DRIFT + " (max |E(t) - E(0)| relative to E_scale = E_kin(0) + M g h, defined for any E(0))",
+        "T1: E conserved (frictionless pivot)",
+    ),
+    Check(
+        "p-phi-drift",
+        "1",
+        1e-8,
+        "abs",
+        _DRIFT + " (relative to L_scale = sqrt(|L(0)|^2 + 2 I1 M g h), defined for a top released at rest)",
+        "T1: p_phi = L_z conserved, eq. 11.61",
+    ),
+    Check(
+        "p-psi-drift",
+        "1",
+        1e-8,
+        "abs",
+        _DRIFT + " (relative to L_scale, as p-phi-drift)",
+        "T1: p_psi = I3 omega3 conserved, eq. 11.62",
+    ),
 )
 _CONSERVED = ("energy-drift", "p-phi-drift", "p-psi-drift")
 _NUTATION = ("theta-min", "theta-max", "nutation-period", "mean-precession", *_CONSERVED)
@@ -119,12 +195,378 @@ def _mgh(p: Mapping[str, Any]) -> float:
     return p["mass"] * p["g"] * p["arm"]
 
 
-def _steady(p: Mapping[str, Any], root: int) -> float:
-    return tops.steady_precession_rates(_pivot_inertia(p), p["I3"], _mgh(p), p["spin"], p["tilt"])[root]
-
-
 def _threshold(p: Mapping[str, Any]) -> float:
     return tops.sleeping_threshold(_pivot_inertia(p), p["I3"], _mgh(p))
+
+
+def _steady(p: Mapping[str, Any], root: int) -> float:
+    """The T4 root (0: slow, 1: fast), or 0 where there is none: the steady cases' spin regime refuses those."""
+    try:
+        rate = tops.steady_precession_rates(_pivot_inertia(p), p["I3"], _mgh(p), p["spin"], p["tilt"])[root]
+    except ValueError:  # I3^2 omega3^2 < 4 I1 M g h cos(theta0)
+        return 0.0
+    return rate if math.isfinite(rate) else 0.0
+
+
+def closed_form(p: Mapping[str, Any]) -> tops.HeavyTop:
+    """The T2-T3 closed form at the parameters (the prediction uses the state MuJoCo holds, equal to round-off)."""
+    return tops.heavy_top(
+        _pivot_inertia(p),
+        p["I3"],
+        _mgh(p),
+        tilt=p["tilt"],
+        tilt_rate=p["nutation_rate"],
+        precession=p["precession"],
+        spin=p["spin"],
+    )
+
+
+@dataclass(frozen=True)
+class Scales:
+    """Rates (rad/s) of a motion of the heavy top, over a nutation period, from the closed form (T2-T3).
+
+    Attributes
+    ----------
+    spin : float
+        |Omega_b| = |I3 - I1| |omega3| / I1: the rate at which the transverse body rates turn in the body frame
+        by themselves (Euler's equations; gravity adds a torque of the pendulum's rate, `pendulum`).
+    omega : float
+        |omega| at its largest: the body's turning rate.
+    precession : float
+        |phi_dot| at its largest.
+    nutation : float
+        2 pi / T_nut.
+    transverse : float
+        sqrt(omega1^2 + omega2^2) at its largest.
+    pendulum : float
+        sqrt(beta) = sqrt(2 M g h / I1): the rate of the gravity torque's effect.
+    """
+
+    spin: float
+    omega: float
+    precession: float
+    nutation: float
+    transverse: float
+    pendulum: float
+
+    @property
+    def fastest(self) -> float:
+        """The fastest rate of the state MuJoCo integrates (the azimuth's whirl near the vertical is not one)."""
+        return max(self.spin, self.omega, self.nutation, self.pendulum)
+
+
+def scales(top: tops.HeavyTop, inertia_pivot: float, inertia_axial: float, spin: float, transverse0: float) -> Scales:
+    """The `Scales` of the motion `top` (moments in kg m^2, spin omega3 and the initial transverse body rate
+    |omega_perp(0)| in rad/s)."""
+    w2, w1 = top.w_roots[1], top.w_roots[0]
+    w = np.linspace(w2, w1, 257)
+    # omega_perp^2 = theta_dot^2 + phi_dot^2 sin^2(theta) = alpha - beta u (energy, THEORY.md T2) = k0 + beta w
+    transverse = float(np.sqrt(max(transverse0**2 + top.beta * w1, 0.0)))
+    return Scales(
+        spin=abs(inertia_axial - inertia_pivot) * abs(spin) / inertia_pivot,
+        omega=float(np.hypot(spin, transverse)),
+        precession=float(np.max(np.abs(top.precession_rate_at_w(w)))),
+        nutation=2 * np.pi / top.nutation_period,
+        transverse=transverse,
+        pendulum=float(np.sqrt(top.beta)),
+    )
+
+
+def momentum_scale(inertia_pivot: float, inertia_axial: float, mgh: float, transverse0: float, spin: float) -> float:
+    """L_scale = sqrt(|L(0)|^2 + 2 I1 M g h) (kg m^2/s): the angular momentum at the start plus what a fall through
+    the potential's amplitude gives; defined (> 0) for a top released at rest without spin."""
+    return float(np.sqrt((inertia_pivot * transverse0) ** 2 + (inertia_axial * spin) ** 2 + 2 * inertia_pivot * mgh))
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The reference run of a parameter set: closed form, scales, step (s), duration (s) and steps."""
+
+    top: tops.HeavyTop
+    scales: Scales
+    step: Derived
+    duration: float
+
+    @property
+    def steps(self) -> float:
+        return self.duration / self.step.value
+
+
+def plan(p: Mapping[str, Any]) -> Plan:
+    """The reference run at the parameters `p` (see the comment on RK4_TARGET).
+
+    Raises
+    ------
+    ValueError
+        Where the closed form is undefined (mgh <= 0, a tilt outside (0, pi)).
+    """
+    return reference_run(
+        closed_form(p),
+        _pivot_inertia(p),
+        p["I3"],
+        _mgh(p),
+        tilt=p["tilt"],
+        tilt_rate=p["nutation_rate"],
+        precession=p["precession"],
+        spin=p["spin"],
+    )
+
+
+def reference_run(
+    top: tops.HeavyTop,
+    inertia_pivot: float,
+    inertia_axial: float,
+    mgh: float,
+    *,
+    tilt: float,
+    tilt_rate: float,
+    precession: float,
+    spin: float,
+) -> Plan:
+    """The reference run of the motion `top` (its initial state as `tops.heavy_top` takes it): RUN_NUTATIONS
+    nutation periods (FALL_NUTATIONS for a falling top whose three would exceed MAX_STEPS) at the step of the
+    comment on RK4_TARGET."""
+    i1 = inertia_pivot
+    transverse0 = float(np.hypot(tilt_rate, precession * np.sin(tilt)))
+    sc = scales(top, i1, inertia_axial, spin, transverse0)
+    r = min(1.0, i1 * sc.transverse / momentum_scale(i1, inertia_axial, mgh, transverse0, spin))
+    omega = sc.fastest
+    # phi is unwrapped only for a steady top (its precession rate is a slope); a nutating one's mean precession counts
+    # whole turns from the prediction, and need not follow the azimuth's whirl near the vertical
+    steady = tilt_rate == 0 and top.w_roots[0] - top.w_roots[1] < 1e-12
+    falling = (
+        tilt <= FALLING_TILT
+        and tilt_rate == 0
+        and precession == 0
+        and abs(spin) < tops.sleeping_threshold(i1, inertia_axial, mgh)
+    )
+    for nutations in (RUN_NUTATIONS, FALL_NUTATIONS) if falling else (RUN_NUTATIONS,):
+        duration = nutations * top.nutation_period
+        by_rk4 = (120 * RK4_TARGET / (max(r, 1e-300) * omega**5 * duration)) ** 0.25
+        by_resolution = SPIN_TURN / omega
+        by_unwrap = UNWRAP_TURN / sc.precession if steady and sc.precession > 0 else np.inf
+        limits = {"RK4 drift": by_rk4, "resolution": by_resolution, "azimuth unwrap": by_unwrap}
+        which = min(limits, key=limits.get)
+        h = round_step(limits[which])
+        if duration / h <= MAX_STEPS:
+            break
+    rule = (
+        f"min((120 x {RK4_TARGET:g} / (r Omega^5 T))^(1/4), {SPIN_TURN:g} / Omega, {UNWRAP_TURN:g} / "
+        f"|phi_dot| if steady) with r = I1 |omega_perp|max / L_scale = {r:.3g}, Omega = max(|omega|max, "
+        f"|I3 - I1| |omega3| / I1, omega_nut, sqrt(beta)) = {omega:.4g} rad/s, T = {nutations:g} T_nut = "
+        f"{duration:.4g} s: min({by_rk4:.4g}, {by_resolution:.4g}, {by_unwrap:.4g}) s ({which}), rounded down to "
+        f"one digit: {h:.1g} s"
+    )
+    return Plan(top, sc, Derived(h, rule), duration)
+
+
+def _plan_or_none(p: Mapping[str, Any]) -> Plan | None:
+    try:
+        return plan(p)
+    except (ValueError, ArithmeticError):
+        return None
+
+
+def _where(p: Mapping[str, Any], *names: str) -> str:
+    units = {"mass": "kg", "arm": "m", "I1": "kg m^2", "I3": "kg m^2", "tilt": "rad", "g": "m/s^2"}
+    return ", ".join(f"{n} = {float(p[n]):.10g} {units.get(n, 'rad/s')}" for n in names)
+
+
+_ALL_NAMES = ("mass", "arm", "I1", "I3", "tilt", "spin", "precession", "nutation_rate", "g")
+
+
+def _run_length(p: Mapping[str, Any]) -> str | None:
+    """Domain test: the run (`run_nutations` nutation periods) takes at most MAX_STEPS reference steps."""
+    pl = _plan_or_none(p)
+    if pl is not None and not pl.steps <= MAX_STEPS:
+        return (
+            f"{_where(p, *_ALL_NAMES)} ({pl.duration / pl.top.nutation_period:g} nutation periods of "
+            f"{pl.top.nutation_period:.3g} s take {pl.steps:.3g} steps of {pl.step.value:.1g} s)"
+        )
+    return None
+
+
+# MuJoCo flags an acceleration (qacc) above mjMAXVAL = 1e10 as a divergence and resets the state ("Nan, Inf or huge
+# value in QACC"): a real engine limit. The body-frame angular acceleration of the top is at most
+# |I1 - I3| |omega3| |omega_perp|max / I1 + M g h / I1 (Euler's equations, THEORY.md R7, with the gravity torque);
+# refused above a tenth of the limit.
+MAX_ACCELERATION = 1e9
+
+
+def _acceleration(p: Mapping[str, Any]) -> str | None:
+    """Domain test: the largest angular acceleration of the motion stays below MAX_ACCELERATION."""
+    pl = _plan_or_none(p)
+    if pl is None:
+        return None
+    i1 = _pivot_inertia(p)
+    bound = abs(i1 - p["I3"]) * abs(p["spin"]) * pl.scales.transverse / i1 + _mgh(p) / i1
+    if not bound <= MAX_ACCELERATION:
+        return f"{_where(p, *_ALL_NAMES)} (angular accelerations up to {bound:.3g} rad/s^2)"
+    return None
+
+
+# The mean precession is the advance of phi between the first and last theta maxima over the run, known to ~2e-11
+# rad (round-off and interpolation, measured); it must advance by 1.2e-4 rad for that to stay below half the 1e-6
+# tolerance (a planar swing, spin = 0 and phi_dot0 = 0, does not precess at all).
+MIN_ADVANCE = 1.2e-4
+
+
+def _advancing(p: Mapping[str, Any]) -> str | None:
+    """Domain test: |mean phi_dot| over the run's whole nutation periods >= MIN_ADVANCE rad."""
+    pl = _plan_or_none(p)
+    if pl is None:
+        return None
+    advance = abs(pl.top.mean_precession_rate) * 3 * pl.top.nutation_period
+    if not advance >= MIN_ADVANCE:
+        return f"{_where(p, *_ALL_NAMES)} (the axis advances {advance:.3g} rad in three nutation periods)"
+    return None
+
+
+def _steady_by_derivation(root: int, case: str):
+    def test(p: Mapping[str, Any]) -> str | None:
+        derived = _steady(p, root)
+        if p["precession"] != derived:
+            return (
+                f"precession = {p['precession']:.10g} rad/s set by hand (case '{case}' starts at the "
+                f"{'slow' if root == 0 else 'fast'} T4 root, {derived:.10g} rad/s here; a top started at another "
+                "phi_dot nutates: run heavy-top:nutation, or heavy-top:looping)"
+            )
+        return None
+
+    return test
+
+
+def _linear_max_tilt(p: Mapping[str, Any]) -> str | None:
+    """Domain test (sleeping): above the T6 threshold, with the linear max tilt within LINEAR_ERROR of the exact."""
+    i1, i3, mgh = _pivot_inertia(p), p["I3"], _mgh(p)
+    if (i3 * p["spin"]) ** 2 <= 4 * i1 * mgh:
+        return f"{_where(p, 'spin')} (at or below the sleeping threshold {_threshold(p):.4g} rad/s)"
+    top = _plan_or_none(p)
+    if top is None:
+        return None
+    linear = tops.sleeping_max_tilt(i1, i3, mgh, p["spin"], p["tilt"])
+    error = abs(linear / top.top.theta_max - 1)
+    if not error <= LINEAR_ERROR:
+        return f"{_where(p, 'tilt', 'spin')} (the linear max tilt is {error:.2g} off the exact root of T2)"
+    return None
+
+
+def _falling(p: Mapping[str, Any]) -> str | None:
+    """Domain test (falling): |spin| at most half the T6 threshold."""
+    if abs(p["spin"]) > 0.5 * _threshold(p) * (1 + 1e-12):
+        return f"{_where(p, 'spin')} (the threshold is {_threshold(p):.4g} rad/s)"
+    return None
+
+
+def _spin_bound(p: Mapping[str, Any]) -> float:
+    """S = omega_c / sqrt(2 SIGMA_MIN): |spin| <= S keeps beta / a^2 >= SIGMA_MIN (omega_c: the T6 threshold)."""
+    return _threshold(p) / math.sqrt(2 * SIGMA_MIN)
+
+
+# A top's pivot inertia is at most RHO_MAX times its axial one: the transverse body rates turn at the spin, the
+# nutation at ~I3 omega3 / I1, so a run of RUN_NUTATIONS nutations takes ~RHO_MAX times more steps than nutations
+# need (1e5 to 1e6 at RHO_MAX = 100); a longer arm makes a spinning pendulum, not a top.
+RHO_MAX = 100.0
+# The T6 threshold omega_c = 2 sqrt(I1 M g h) / I3 is the top's natural rate (>= the pendulum's sqrt(M g h / I1) / 2):
+# at most OMEGA_C_MAX (a bound on g), so that the spins up to S = 129 omega_c and the initial rates fit RATE_RANGE.
+OMEGA_C_MAX = 1e4
+RATE_RANGE = Range(-1e6, 1e6)
+# The gyroscopic ratio beta / a^2 = 2 I1 M g h / (I3 omega3)^2 at least: a faster top nutates by ~(beta / a^2)
+# sin^2(theta0) and precesses by ~pi beta / a^2 rad per nutation, below the ~1e-11 of the state's round-off
+# relative to the 1e-6 tolerances (the mean precession needs 1.2e-4 rad over three nutations: 'advancing').
+SIGMA_MIN = 3e-5
+
+DOMAINS = (
+    Domain(
+        "mujoco-max-acceleration",
+        "T1 (MuJoCo: mjMAXVAL = 1e10)",
+        f"angular accelerations |I1 - I3| |omega3| |omega_perp|max / I1 + M g h / I1 <= {MAX_ACCELERATION:g} "
+        "rad/s^2: MuJoCo treats a joint acceleration above mjMAXVAL = 1e10 as a divergence and resets the state "
+        "(an engine limit, not the theory's)",
+        _acceleration,
+    ),
+    Domain(
+        "run-length",
+        "T3 (T_nut = 4 K(k) / sqrt(beta (u3 - u1)))",
+        f"{RUN_NUTATIONS:g} nutation periods (or the first fall of a falling top) in at most {MAX_STEPS:.0e} "
+        "reference steps (the step follows the fastest rate of the motion, its spin at most, the run its "
+        "nutation: a top with a long arm, I1 ~ 100 I3, spins ~100 times faster than it nutates)",
+        _run_length,
+    ),
+    Domain(
+        "advancing",
+        "T3 (mean precession)",
+        f"the axis advances by >= {MIN_ADVANCE:g} rad in three nutation periods: the mean precession is the "
+        "advance of phi between theta maxima, known to ~2e-11 rad (round-off), so smaller advances are not "
+        "measurable to the 1e-6 tolerance (a planar swing, spin = 0 and phi_dot0 = 0, does not precess)",
+        _advancing,
+        cases=("nutation", "looping", "sleeping"),
+    ),
+    Domain(
+        "slow-steady",
+        "T4 (steady precession)",
+        "case slow-precession starts at the slow T4 root: precession is derived, not set by hand (a top started "
+        "at another phi_dot nutates; heavy-top:nutation and heavy-top:looping take any phi_dot)",
+        _steady_by_derivation(0, "slow-precession"),
+        cases=("slow-precession",),
+    ),
+    Domain(
+        "fast-steady",
+        "T4 (steady precession)",
+        "case fast-precession starts at the fast T4 root: precession is derived, not set by hand (a top started "
+        "at another phi_dot nutates; heavy-top:nutation and heavy-top:looping take any phi_dot)",
+        _steady_by_derivation(1, "fast-precession"),
+        cases=("fast-precession",),
+    ),
+    Domain(
+        "linear-max-tilt",
+        "T6 (sleeping top, Wilcox prob. 11.13)",
+        f"I3^2 omega3^2 > 4 I1 M g h (above the threshold) and the linear max tilt within {LINEAR_ERROR:g} of "
+        "the exact root of T2 (a tenth of the check's 1e-3 tolerance): the linearisation's error grows like "
+        "theta0^2 and without bound toward the threshold",
+        _linear_max_tilt,
+        cases=("sleeping",),
+    ),
+    Domain(
+        "falling",
+        "T6 (falling top)",
+        "|spin| <= half the T6 threshold 2 sqrt(I1 M g h) / I3: the fit of ln(theta) over [20, 100] theta0 is "
+        "biased by the decaying mode, more as the spin nears the threshold (2.2e-4 measured at one half)",
+        _falling,
+        cases=("falling",),
+    ),
+)
+
+_ZERO = Range(0.0, 0.0)
+# Tilts of the nutation, looping and steady cases: near the vertical their checks are ill-conditioned (theta_min -> 0
+# is checked relative to itself; a top below the sleeping threshold returns to its start only to dE / (M g h
+# theta0^2); the azimuth of a steady top's axis carries the orientation's round-off over sin(theta0)). The sleeping and
+# falling cases cover the nearly upright top.
+_OFF_VERTICAL = Range(0.01, np.pi - 0.01)
+_OFF_VERTICAL_WHY = (
+    "theta0 within 0.01 rad of the vertical makes the checks relative to theta ill-conditioned (the sleeping and "
+    "falling cases cover the nearly upright top)"
+)
+# Spins of the steady and looping cases: T4 has roots for I3^2 omega3^2 >= 4 I1 M g h cos(theta0), i.e. omega3 >=
+# omega_c sqrt(cos(theta0)) above the horizontal; at least omega_c / 100 keeps the slow root below 100 omega_c near
+# the horizontal (2 M g h / (I3 omega3)). A negative spin mirrors the motion (phi_dot -> -phi_dot).
+_STEADY_SPIN = Bound(
+    "[omega_c max(sqrt(max(cos tilt, 0)), 0.01), S]",
+    lambda p: Range(_threshold(p) * max(math.sqrt(max(math.cos(p["tilt"]), 0.0)), 0.01), _spin_bound(p)),
+    ("mass", "arm", "I1", "I3", "g", "tilt"),
+)
+# The fast root (I3 omega3 + sqrt(D)) / (2 I1 cos(theta0)) <= I3 omega3 / (I1 cos(theta0)): infinite at the
+# horizontal, so fast-precession stays above it (cos(theta0) >= 0.07) with a spin that keeps the root <= 5e5 rad/s.
+FAST_TILT = 1.5
+_FAST_SPIN = Bound(
+    "[omega_c max(sqrt(cos tilt), 0.01), min(S, 5e5 (I1 + M arm^2) cos(tilt) / I3)]",
+    lambda p: Range(
+        _threshold(p) * max(math.sqrt(max(math.cos(p["tilt"]), 0.0)), 0.01),
+        min(_spin_bound(p), 5e5 * _pivot_inertia(p) * math.cos(p["tilt"]) / p["I3"]),
+    ),
+    ("mass", "arm", "I1", "I3", "g", "tilt"),
+)
+_AT_REST = "released at rest (theta_dot = phi_dot = 0), as T6 assumes"
 
 
 class HeavyTop(Scenario):
@@ -135,76 +577,156 @@ class HeavyTop(Scenario):
     title = "Heavy symmetric top on a fixed pivot (Lagrange top)"
     env_id = "rigidbench/HeavyTop-v0"
     params = (
-        Param("mass", "kg", "mass of the top", positive(1e3), BodyMass("top")),
         Param(
-            "arm",
-            "m",
-            "distance h from the pivot to the CM along the symmetry axis",
-            positive(10.0),
-            BodyComOffset("top", 2),
+            "mass",
+            "kg",
+            "mass of the top (three decades below the default 0.1 kg, four above)",
+            Range(1e-4, 1e3),
+            BodyMass("top"),
         ),
         Param(
             "I1",
             "kg m^2",
             "transverse principal moment about the CM (the theory adds M arm^2 for the pivot)",
-            positive(1e3),
+            Range(1e-7, 1e3),
             BodyInertia("top", (0, 1)),
         ),
-        Param("I3", "kg m^2", "principal moment about the symmetry axis", positive(1e3), BodyInertia("top", (2,))),
+        Param(
+            "arm",
+            "m",
+            "distance h from the pivot to the CM along the symmetry axis; at most sqrt(199 I1 / mass), so that "
+            f"I3 can reach (I1 + mass arm^2) / {RHO_MAX:g} (a top, not a spinning pendulum)",
+            Range(1e-4, 10.0),
+            BodyComOffset("top", 2),
+            within=Bound(
+                f"[1e-4, sqrt({2 * RHO_MAX - 1:g} I1 / mass)]",
+                lambda p: Range(1e-4, math.sqrt((2 * RHO_MAX - 1) * p["I1"] / p["mass"])),
+                ("I1", "mass"),
+            ),
+        ),
+        Param(
+            "I3",
+            "kg m^2",
+            "principal moment about the symmetry axis; between (I1 + mass arm^2) / 100 (see arm) and 2 I1",
+            Range(1e-11, 2e3),
+            BodyInertia("top", (2,)),
+            within=Bound(
+                f"[(I1 + mass arm^2) / {RHO_MAX:g}, 2 I1] (the triangle inequality I3 <= I1 + I2 of every rigid "
+                "body; the pivot inertia at most 100 I3)",
+                lambda p: Range(_pivot_inertia(p) / RHO_MAX, 2 * p["I1"]),
+                ("I1", "mass", "arm"),
+            ),
+        ),
         Param(
             "tilt",
             "rad",
             "initial angle theta0 of the symmetry axis from the upward vertical",
-            Range(0, np.pi, low_open=True, high_open=True),
+            Range(1e-6, np.pi - 1e-6),
             Numeric("tilt"),
+        ),
+        Param(
+            "g",
+            "m/s^2",
+            f"gravitational acceleration (along -z); at most what puts the T6 threshold omega_c at {OMEGA_C_MAX:g} "
+            "rad/s, so that the top's rates (up to ~1e6 rad/s, see spin) fit their ranges",
+            Range(1e-2, 1e3),
+            Gravity(),
+            within=Bound(
+                f"[1e-2, g_max], g_max = {OMEGA_C_MAX:g}^2 I3^2 / (4 (I1 + M arm^2) M arm) (omega_c <= "
+                f"{OMEGA_C_MAX:g})",
+                lambda p: Range(1e-2, OMEGA_C_MAX**2 * p["I3"] ** 2 / (4 * _pivot_inertia(p) * p["mass"] * p["arm"])),
+                ("mass", "arm", "I1", "I3"),
+            ),
         ),
         Param(
             "spin",
             "rad/s",
-            "omega3, angular velocity about the symmetry axis (conserved)",
-            Range(-1e4, 1e4),
+            "omega3, angular velocity about the symmetry axis (conserved); at most S = omega_c / sqrt(2 x 3e-5) in "
+            "magnitude, omega_c = 2 sqrt(I1 M g h) / I3 the T6 threshold (beta / a^2 >= 3e-5: a faster top's "
+            "nutation and precession sink below round-off)",
+            RATE_RANGE,
             Numeric("spin"),
+            within=Bound(
+                "[-S, S], S = omega_c / sqrt(6e-5) (omega_c = 2 sqrt((I1 + M arm^2) M g arm) / I3)",
+                lambda p: Range(-_spin_bound(p), _spin_bound(p)),
+                ("mass", "arm", "I1", "I3", "g"),
+            ),
         ),
         Param(
             "precession",
             "rad/s",
-            "initial phi_dot, rate of the axis about the vertical",
-            Range(-1e4, 1e4),
+            "initial phi_dot, rate of the axis about the vertical; at most 30 S in magnitude (see spin: the fast "
+            "T4 root of fast-precession is below 28.3 S)",
+            RATE_RANGE,
             Numeric("precession"),
+            within=Bound(
+                "[-30 S, 30 S]",
+                lambda p: Range(-30 * _spin_bound(p), 30 * _spin_bound(p)),
+                ("mass", "arm", "I1", "I3", "g"),
+            ),
         ),
-        Param("nutation_rate", "rad/s", "initial theta_dot", Range(-1e4, 1e4), Numeric("nutation_rate")),
-        Param("g", "m/s^2", "gravitational acceleration (along -z)", positive(1e3), Gravity()),
+        Param(
+            "nutation_rate",
+            "rad/s",
+            "initial theta_dot; at most S in magnitude (see spin)",
+            RATE_RANGE,
+            Numeric("nutation_rate"),
+            within=Bound(
+                "[-S, S]",
+                lambda p: Range(-_spin_bound(p), _spin_bound(p)),
+                ("mass", "arm", "I1", "I3", "g"),
+            ),
+        ),
     )
     cases = (
         Case(
             "nutation",
-            "released with theta_dot = phi_dot = 0: cusped nutation between the cubic's roots",
+            "released with theta_dot = phi_dot = 0 (cusped nutation between the cubic's roots); any initial rates "
+            "are covered by T2-T3",
             {"tilt": 0.5, "precession": 0.0, "nutation_rate": 0.0},
             _NUTATION,
+            ranges={"tilt": _OFF_VERTICAL},
+            regime=_OFF_VERTICAL_WHY,
         ),
         Case(
             "looping",
             "released with phi_dot = minus the gyroscopic rate: phi_dot changes sign (loops)",
             {"tilt": 0.5, "nutation_rate": 0.0, "precession": lambda p: -_steady(p, 0)},
             (*_NUTATION, "precession-at-theta-min", "precession-at-theta-max"),
+            ranges={"tilt": _OFF_VERTICAL, "spin": _STEADY_SPIN, "nutation_rate": _ZERO},
+            regime="released at rest in theta with phi_dot0 = minus the slow T4 root, which exists for I3^2 omega3^2 "
+            ">= 4 I1 M g h cos(theta0) (as slow-precession): the loop between theta0 and theta_max, whose turning "
+            "points' phi_dot are checked (a theta_dot0 can carry the axis past the vertical, where phi_dot is "
+            f"ill-conditioned; the nutation case takes any); {_OFF_VERTICAL_WHY}",
         ),
         Case(
             "slow-precession",
             "phi_dot at the slow root of T4: theta stays at tilt",
             {"tilt": 0.5, "nutation_rate": 0.0, "precession": lambda p: _steady(p, 0)},
             _STEADY,
+            ranges={"nutation_rate": _ZERO, "tilt": _OFF_VERTICAL, "spin": _STEADY_SPIN},
+            regime="steady precession starts with theta_dot = 0, and exists above the horizontal only for "
+            "I3^2 omega3^2 >= 4 I1 M g h cos(theta0) (T4); a negative spin mirrors the motion (phi_dot -> "
+            f"-phi_dot) and is covered by the nutation case; {_OFF_VERTICAL_WHY}",
         ),
         Case(
             "fast-precession",
             "phi_dot at the fast root of T4: theta stays at tilt",
             {"tilt": 0.5, "nutation_rate": 0.0, "precession": lambda p: _steady(p, 1)},
             _STEADY,
+            ranges={"nutation_rate": _ZERO, "tilt": Range(_OFF_VERTICAL.low, FAST_TILT), "spin": _FAST_SPIN},
+            regime=f"as slow-precession, above the horizontal (theta0 <= {FAST_TILT:g} rad): the fast root "
+            "(I3 omega3 + sqrt(D)) / (2 I1 cos(theta0)) grows without bound toward it; spin <= 5e5 I1 cos(theta0) / "
+            "I3 keeps the root within 5e5 rad/s",
         ),
         Case(
             "sleeping",
             "nearly upright (0.01 rad) at 1.5x the T6 threshold spin: the tilt stays bounded",
             {"tilt": 0.01, "precession": 0.0, "nutation_rate": 0.0, "spin": lambda p: 1.5 * _threshold(p)},
             (*_NUTATION, "max-tilt-linear"),
+            ranges={"tilt": Range(1e-6, SLEEPING_TILT), "precession": _ZERO, "nutation_rate": _ZERO},
+            regime=f"{_AT_REST}; theta0 <= {SLEEPING_TILT:g} rad keeps the linearisation's error 0.147 theta0^2 "
+            "(at 1.5x the threshold) below 1e-4, a tenth of the max-tilt-linear tolerance",
         ),
         # No nutation-period check here: a top released at rest at theta0 from the upright returns to theta0,
         # and its period ~ (2/gamma) ln(1/theta0) hangs on how close it comes back, which the conserved energy
@@ -215,12 +737,20 @@ class HeavyTop(Scenario):
             "nearly upright (1e-4 rad) at 0.5x the T6 threshold spin: the tilt grows exponentially",
             {"tilt": 1e-4, "precession": 0.0, "nutation_rate": 0.0, "spin": lambda p: 0.5 * _threshold(p)},
             ("theta-max", "tilt-growth-rate", *_CONSERVED),
+            ranges={"tilt": Range(1e-6, FALLING_TILT), "precession": _ZERO, "nutation_rate": _ZERO},
+            regime=f"{_AT_REST}; theta0 <= {FALLING_TILT:g} rad keeps the nonlinear terms (100 theta0)^2 over "
+            "the fitted window [20, 100] theta0 below 1e-4",
         ),
     )
     checks = CHECKS
+    domains = DOMAINS
 
     def validate(self, params: Mapping[str, Any]) -> None:
         require_rigid_body_inertia(params["I1"], params["I1"], params["I3"], "I1 = I2, I3 (about the CM)")
+
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        pl = _plan_or_none(params)
+        return {} if pl is None else {"timestep": pl.step}
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         theta = params["tilt"]
@@ -249,10 +779,17 @@ class HeavyTop(Scenario):
         phi_dot0 = float((w1 * R[2, 0] + w2 * R[2, 1]) / (s * s))
         top = tops.heavy_top(i1, i3, mgh, tilt=tilt, tilt_rate=tilt_rate, precession=phi_dot0, spin=float(spin))
         steady = tilt_rate == 0 and (top.w_roots[0] - top.w_roots[1]) < 1e-12
+        transverse0 = float(np.hypot(w1, w2))
         out = {
             "_theory": top,
             "_steady": steady,
+            "_run_nutations": reference_run(
+                top, i1, i3, mgh, tilt=tilt, tilt_rate=tilt_rate, precession=phi_dot0, spin=float(spin)
+            ).duration
+            / top.nutation_period,
             "_tilt0": tilt,
+            "_energy_scale": 0.5 * float(np.sum(m.inertia_B * m.omega_B[0] ** 2)) + mgh,
+            "_momentum_scale": momentum_scale(i1, i3, mgh, transverse0, float(spin)),
             "theta-min": top.theta_min,
             "theta-max": top.theta_max,
             "nutation-period": top.nutation_period,
@@ -264,6 +801,7 @@ class HeavyTop(Scenario):
             "energy-drift": 0.0,
             "p-phi-drift": 0.0,
             "p-psi-drift": 0.0,
+            "_tolerance": {"theta-min": self.check("theta-min").tolerance * max(1.0, THETA_FLOOR / top.theta_min)},
         }
         if (i3 * spin) ** 2 > 4 * i1 * mgh:
             out["max-tilt-linear"] = tops.sleeping_max_tilt(i1, i3, mgh, spin, tilt)
@@ -275,9 +813,10 @@ class HeavyTop(Scenario):
         return out
 
     def duration(self, prediction: Mapping[str, Any]) -> float:
-        if prediction["_steady"]:
-            return 2 * 2 * np.pi / abs(prediction["precession-rate"])  # two turns about the vertical
-        return 3.3 * prediction["nutation-period"]  # three full nutations (four maxima of theta)
+        # Three full nutations (four maxima of theta); for a steady top, three periods of the small nutation about
+        # it (T5; the closed form's period at a double root), over which the precession rate is a slope; a falling
+        # top whose three would be too long, its first fall (`reference_run`).
+        return prediction["_run_nutations"] * prediction["nutation-period"]
 
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
         m = self.motion(model, traj.time, traj.qpos, traj.qvel)
@@ -287,30 +826,42 @@ class HeavyTop(Scenario):
         u_dot = np.cross(m.omega_W, e3)[:, 2]
         u = e3[:, 2]
         phi = np.unwrap(np.arctan2(e3[:, 0], -e3[:, 1]))
-        phi_dot = (m.omega_W[:, 2] - m.omega_B[:, 2] * u) / (1 - u * u)
-        # theta is largest where u is smallest: minima of u are the zero crossings of u_dot going up.
-        t_max, theta_max = signals.extrema(t, theta, -u_dot, "max")
-        t_min, theta_min = signals.extrema(t, theta, -u_dot, "min")
+        # sin^2(theta) phi_dot = omega1 R31 + omega2 R32 (THEORY.md section 0 inverted), free of the cancellation of
+        # (omega_z - omega3 u) / (1 - u^2) near the vertical
+        R = m.R_WB
+        sin2_phi_dot = m.omega_B[:, 0] * R[:, 2, 0] + m.omega_B[:, 1] * R[:, 2, 1]  # smooth, unlike phi_dot
+        # theta is largest where u is smallest: minima of u are the zero crossings of u_dot going up. theta at each
+        # from the axis' components interpolated there (smooth where theta(t) has a corner, at a pass near a pole).
+        t_max = signals.crossings(t, -u_dot, -1)
+        t_min = signals.crossings(t, -u_dot, 1)
+        axis_max, axis_min = _axis_at(t, e3, t_max), _axis_at(t, e3, t_min)
+        theta_max = _polar(axis_max)
+        theta_min = _polar(axis_min)
+        L_scale = prediction["_momentum_scale"]
+        energy = m.kinetic_energy + self._mgh(model) * u
         out = {
             "theta-max": _worst(theta_max, prediction["theta-max"]),
             "theta-min": _worst(
                 np.concatenate([theta_min, [theta[0]] if traj.qvel[0, 0] == 0 else []]), prediction["theta-min"]
             ),
             "nutation-period": signals.mean_spacing(t_max),
-            "mean-precession": float(np.diff(signals.interpolate(t, phi, t_max[[0, -1]]))[0] / (t_max[-1] - t_max[0]))
-            if len(t_max) >= 2
-            else float("nan"),
+            "mean-precession": _mean_precession(
+                (t_max, axis_max)
+                if np.sin(prediction["theta-max"]) >= np.sin(prediction["theta-min"])
+                else (t_min, axis_min),
+                prediction["mean-precession"],
+            ),
             "precession-at-theta-min": _worst(
-                signals.interpolate(t, phi_dot, t_min), prediction["precession-at-theta-min"]
+                _phi_dot_at(t, sin2_phi_dot, t_min, axis_min), prediction["precession-at-theta-min"]
             ),
             "precession-at-theta-max": _worst(
-                signals.interpolate(t, phi_dot, t_max), prediction["precession-at-theta-max"]
+                _phi_dot_at(t, sin2_phi_dot, t_max, axis_max), prediction["precession-at-theta-max"]
             ),
             "tilt-deviation": float(np.abs(theta - prediction["_tilt0"]).max()),
             "precession-rate": signals.phase_rate(t, phi),
-            "energy-drift": signals.max_relative_drift(m.kinetic_energy + self._mgh(model) * u),
-            "p-phi-drift": float(np.abs(m.L_W[:, 2] - m.L_W[0, 2]).max() / np.linalg.norm(m.L_W[0])),
-            "p-psi-drift": signals.max_relative_drift(m.L_B[:, 2]),
+            "energy-drift": float(np.abs(energy - energy[0]).max() / prediction["_energy_scale"]),
+            "p-phi-drift": float(np.abs(m.L_W[:, 2] - m.L_W[0, 2]).max() / L_scale),
+            "p-psi-drift": float(np.abs(m.L_B[:, 2] - m.L_B[0, 2]).max() / L_scale),
         }
         if "tilt-growth-rate" in prediction:
             out["tilt-growth-rate"] = self._growth(t, theta, prediction["_tilt0"])
@@ -334,6 +885,41 @@ class HeavyTop(Scenario):
         if np.count_nonzero(window) < 3:
             return float("nan")
         return float(np.polyfit(t[rise][window], np.log(theta[rise][window]), 1)[0])
+
+
+def _axis_at(t: np.ndarray, e3_W: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The axis e3 (world) at times `at`, each component cubic-interpolated, shape (len(at), 3)."""
+    if len(at) == 0:
+        return np.zeros((0, 3))
+    return np.stack([signals.interpolate(t, e3_W[:, i], at) for i in range(3)], axis=-1)
+
+
+def _phi_dot_at(t: np.ndarray, sin2_phi_dot: np.ndarray, at: np.ndarray, axis_W: np.ndarray) -> np.ndarray:
+    """phi_dot (rad/s) at times `at`: sin^2(theta) phi_dot (smooth) interpolated, over sin^2(theta) of the axes
+    there."""
+    if len(at) == 0:
+        return np.zeros(0)
+    return signals.interpolate(t, sin2_phi_dot, at) / (axis_W[:, 0] ** 2 + axis_W[:, 1] ** 2)
+
+
+def _polar(axis_W: np.ndarray) -> np.ndarray:
+    """theta (rad) of axes (n, 3), from the upward vertical, free of cancellation near either pole."""
+    return np.arctan2(np.hypot(axis_W[:, 0], axis_W[:, 1]), axis_W[:, 2])
+
+
+def _mean_precession(extremes: tuple[np.ndarray, np.ndarray], predicted: float) -> float:
+    """Mean phi_dot (rad/s) between the first and last of a family of extremes of theta (times, axes there): the
+    azimuth of the axis at each, and the whole turns between consecutive ones counted from the `predicted` rate
+    (the azimuth whirls where the axis passes near a pole, and sampled phi cannot be unwrapped there). The family
+    farther from its pole is used (its azimuth the better defined)."""
+    t_ext, axis = extremes
+    if len(t_ext) < 2:
+        return float("nan")
+    az = np.arctan2(axis[:, 0], -axis[:, 1])
+    step = np.diff(az)
+    expected = predicted * np.diff(t_ext)
+    step += 2 * np.pi * np.round((expected - step) / (2 * np.pi))
+    return float(step.sum() / (t_ext[-1] - t_ext[0]))
 
 
 def _worst(values: np.ndarray, expected: float) -> float:
@@ -365,12 +951,14 @@ class HeavyTopEnv(RotorEnv):
         Tilt ``tilt`` from the upward vertical, rates (nutation_rate, precession sin(tilt), spin) in body axes.
 
     Episode End
-        Truncated after 3.3 nutation periods (two precession turns if steady); terminated on divergence.
+        Truncated after 3.3 nutation periods (of the small nutation about it, T5, if steady; the first fall, 0.6
+        periods, for a falling top whose three would exceed 1e6 steps); terminated on divergence.
 
     Arguments
         ``case`` (nutation, looping, slow-precession, fast-precession, sleeping, falling), ``params`` (mass, arm,
         I1, I3, tilt, spin, precession, nutation_rate, g), ``profile``, ``integrator``, ``timestep``,
-        ``frame_skip`` (default 10, i.e. 1 ms), ``render_mode``.
+        ``frame_skip`` (default 10: 1 ms at the default cases; the reference timestep follows the parameters, see
+        `HeavyTop.reference_settings`), ``render_mode``.
 
     Version History
         v0: initial version.

@@ -7,9 +7,10 @@ Turns MuJoCo's raw state rows into named physical quantities with their frames i
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import mujoco
@@ -26,6 +27,57 @@ OMEGA_PARAM = Param(
     Range(-100, 100),
     Numeric("omega"),
     size=3,
+)
+
+# Principal moments of the free tops (kg m^2). Their motion depends only on the ratios of the moments (and omega),
+# so the scale is free: four decades below the defaults (~1 kg m^2) to three above. MuJoCo solves for the angular
+# acceleration in world axes, with an inertia matrix of condition I_max / I_min (up to 1e7 here): the round-off that
+# puts in the rates is bounded where it matters by the scenarios' domains (measured at I3 / I1 = 1e-8, omega-body
+# 5e-11; at 1e-10, 2e-9; free-symmetric-top keeps I1 / I3 <= 1e3, see its domain 'axial-round-off').
+FREE_INERTIA = Range(1e-4, 1e3)
+
+# The smallest turn per step (rad) of a rate a check measures as a slope: MuJoCo adds each step's change of the state
+# to it and rounds it to an ulp, so a phase that turns by x rad per step carries a rounding error of up to eps/x of
+# its advance (systematic in the worst case: the rounding of a change far below an ulp is biased). 2 eps / 1e-8
+# keeps it at half the 1e-8 tolerance of the rate checks. Measured: a body-frame precession turning 5e-13 rad per
+# step came out 7e-5 off (the bound: 4e-4).
+MIN_TURN_PER_STEP = 2 * float(np.finfo(float).eps) / 1e-8
+
+
+def round_step(h: float) -> float:
+    """A derived timestep rounded down to one significant digit (1, 2, ..., 9 times a power of ten, s).
+
+    Never larger than the rule's value, so its error bounds hold, and at most a factor 2 smaller. A step that stays
+    the same over a range of parameters is readable, reproducible from its printed value, and equal to the model
+    file's step at every default case (the rules are calibrated a hair above it there).
+    """
+    e = math.floor(math.log10(h))
+    return float(f"{math.floor(h / 10.0**e * (1 + 1e-12))}e{e}")
+
+
+# Most steps of a free-symmetric-top run (1.5e5 at the prolate default); the rates are slopes of phases and need no
+# whole turns.
+MAX_FREE_STEPS = 200_000
+
+
+# MuJoCo rotates a quaternion by |omega| h about omega / |omega|, and skips the rotation where |omega| < mjMINVAL =
+# 1e-15 (mju_normalize3 returns 0): a body turning slower does not turn in MuJoCo at all (measured: a free top at
+# |omega| = 1e-16 rad/s keeps its orientation, momentum drift 2). Refused below MIN_RATE, which keeps the slowest
+# |omega| along a free motion (>= sqrt(I_min / I_max) of the start) well above it.
+MIN_RATE = 1e-9
+
+
+def mujoco_min_rate(p: Mapping[str, Any]) -> str | None:
+    """Domain test: |omega| >= MIN_RATE (MuJoCo's mjMINVAL, see there)."""
+    speed = float(np.linalg.norm(np.asarray(p["omega"], dtype=float)))
+    if not speed >= MIN_RATE:
+        return f"omega = {','.join(f'{float(x):.10g}' for x in p['omega'])} rad/s (|omega| = {speed:.3g} rad/s)"
+    return None
+
+
+MIN_RATE_DOMAIN_TEXT = (
+    f"|omega| >= {MIN_RATE:g} rad/s: MuJoCo rotates the orientation by |omega| h about omega / |omega| and skips "
+    "the rotation where |omega| < mjMINVAL = 1e-15 rad/s, so a slower body does not turn at all (an engine limit)"
 )
 
 

@@ -204,3 +204,92 @@ def test_fast_top_nutation_frequency_tends_to_a():
         top = tops.heavy_top(I1, I3, MGH, tilt=0.5, tilt_rate=0.0, precession=0.0, spin=spin)
         a = I3 * spin / I1
         assert 2 * np.pi / top.nutation_period == pytest.approx(a, rel=3 * top.beta / a**2)
+
+
+def _exact_precession_rate(top, precession, w):
+    """phi_dot = (b - a u)/(1 - u^2) in exact rational arithmetic on the float inputs: b = phi_dot0 s2 + a u0,
+    u = u0 - w, 1 - u^2 = s2 + 2 u0 w - w^2 (s2 = sin^2(theta0) as the closed form holds it)."""
+    from fractions import Fraction as F
+
+    a, u0, s2, w = F(top.a), F(top.u0), F(top.sin2_tilt), F(float(w))
+    b = F(precession) * s2 + a * u0
+    return (b - a * (u0 - w)) / (s2 + 2 * u0 * w - w * w)
+
+
+def test_precession_rate_at_w_keeps_its_digits_near_the_inverted_top():
+    """T2: phi_dot = (b - a u)/(1 - u^2) lost the digits of b - a u0 = phi_dot0 sin^2(theta0) to a u0 when the
+    top hangs nearly inverted with a slow precession (7.5e-9 in a census). Against exact rational arithmetic at
+    many states (turning points and points between), the error is a few ulps times the conditioning of the
+    sums c + a w and 1 - u^2 themselves."""
+    eps = np.finfo(float).eps
+    rng = np.random.default_rng(13)
+    worst = 0.0
+    for _ in range(300):
+        tilt = np.pi - 10 ** rng.uniform(-6, -1) if rng.random() < 0.7 else rng.uniform(0.05, 3.0)
+        spin = 10 ** rng.uniform(0, 4) * rng.choice([-1, 1])
+        precession = 10 ** rng.uniform(-4, 1) * rng.choice([-1, 1])
+        try:
+            top = tops.heavy_top(I1, I3, MGH, tilt=tilt, tilt_rate=0.0, precession=precession, spin=spin)
+        except ValueError:
+            continue
+        w1, w2, _ = top.w_roots
+        for w in (w1, w2, *np.linspace(w2, w1, 5)[1:-1]):
+            exact = _exact_precession_rate(top, precession, w)
+            got = float(top.precession_rate_at_w(w))
+            num = (abs(top.c) + abs(top.a * w)) / abs(top.c + top.a * w)
+            den = (top.sin2_tilt + abs(2 * top.u0 * w) + w * w) / abs(top.sin2_tilt + 2 * top.u0 * w - w * w)
+            err = abs(got - float(exact)) / abs(float(exact))
+            worst = max(worst, err / (eps * (num + den)))
+    assert worst <= 4, worst
+
+
+def test_inverted_top_precession_rate_agrees_with_the_steady_root_to_round_off():
+    """A top hanging nearly inverted released at its slow steady rate stays steady: the closed form's phi_dot at
+    w = 0 returns that rate to round-off (before the fix: 1e-9 relative, the digits of a u0 that c lacks)."""
+    for tilt in (np.pi - 1e-3, np.pi - 1e-5):
+        slow, _ = tops.steady_precession_rates(I1, I3, MGH, 1e3, tilt)
+        top = tops.heavy_top(I1, I3, MGH, tilt=tilt, tilt_rate=0.0, precession=slow, spin=1e3)
+        assert float(top.precession_rate_at_w(0.0)) == pytest.approx(slow, rel=4 * np.finfo(float).eps)
+
+
+def test_mean_precession_keeps_the_spike_where_the_axis_passes_near_the_vertical():
+    """T3: Delta phi / T_nut in closed form (elliptic integrals of the third kind) against a trapezoid rule fine
+    enough to resolve phi_dot's spike ~|omega_perp| / theta_min at the pass (2^21 points); the 4096 points of a
+    smooth-integrand rule miss it (a census found 391 rad/s predicted for ~0)."""
+    # thrown toward the vertical with b = p_phi / I1 a hair above a: passes within 8e-4 rad of it once a nutation
+    spin, tilt = 20.0, 0.5
+    a = I3 * spin / I1
+    precession = a * (1 - np.cos(tilt)) / np.sin(tilt) ** 2 + 0.1
+    top = tops.heavy_top(I1, I3, MGH, tilt=tilt, tilt_rate=-30.0, precession=precession, spin=spin)
+    assert top.theta_min < 1e-3
+    t = top.t_max_tilt + top.nutation_period * np.arange(2**21) / 2**21
+    fine = float(np.mean(top.precession_rate_at_w(top.w(t))))
+    coarse = float(np.mean(top.precession_rate_at_w(top.w(t[:: 2**9]))))
+    assert top.mean_precession_rate == pytest.approx(fine, rel=1e-10)
+    assert abs(coarse / fine - 1) > 1e-2
+
+
+def test_mean_precession_of_a_steady_top_is_its_rate():
+    """At a double root (steady precession, T4) Pi(0 | m) = K(m): the mean rate is phi_dot0 to round-off."""
+    slow, fast = tops.steady_precession_rates(I1, I3, MGH, 150.0, 0.5)
+    for rate in (slow, fast):
+        top = tops.heavy_top(I1, I3, MGH, tilt=0.5, tilt_rate=0.0, precession=rate, spin=150.0)
+        assert top.mean_precession_rate == pytest.approx(rate, rel=1e-13)
+
+
+def test_separatrix_sensitivity_grows_like_the_inverse_gap_off_the_intermediate_axis():
+    """A3: off the intermediate axis by eps the gap L^2 - 2 E I2 ~ eps^2, so S ~ 1/eps^2; S >= 2 always."""
+    inertia = (1.0, 2.0, 2.5)
+    s = [tops.separatrix_sensitivity(inertia, [0.0, 3 * np.cos(e), 3 * np.sin(e)]) for e in (1e-2, 1e-3)]
+    assert s[1] / s[0] == pytest.approx(100, rel=1e-3)
+    assert tops.separatrix_sensitivity(inertia, [0.05, 0.1, 3.0]) >= 2
+
+
+def test_slender_body_is_far_from_the_separatrix_in_sensitivity_though_its_gap_is_small():
+    """A body with I1 << I2 ~ I3 has |L^2 - 2 E I2| << L^2 in every state, but its phase is insensitive to the
+    rates there: S stays O(1) (a gap-based domain refused 20 % of a census's valid draws)."""
+    inertia, omega = (0.358, 360.0, 360.3), [1.0, 2.0, 3.0]
+    w = np.array(omega)
+    i = np.array(inertia)
+    assert abs(np.sum(i * (i - i[1]) * w**2)) / np.sum((i * w) ** 2) < 1e-2
+    assert tops.separatrix_sensitivity(inertia, omega) < 10
