@@ -24,11 +24,11 @@ from rigidbench.envs.rotor import (
     free_body_motion,
     mujoco_min_rate,
     require_rigid_body_inertia,
-    round_step,
     set_free_body_rotation,
 )
 from rigidbench.params import BodyInertia, Bound, Param, Range
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
+from rigidbench.settings import round_step
 from rigidbench.simulate import Trajectory
 
 # Reference timestep (`FreeSymmetricTop.reference_settings`): the smaller of two limits.

@@ -20,9 +20,10 @@ import numpy as np
 
 from rigidbench import frames, signals
 from rigidbench.analytic import tops
-from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia, round_step
+from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia
 from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Bound, Gravity, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
+from rigidbench.settings import round_step
 from rigidbench.simulate import Trajectory
 
 # Reference timestep (`HeavyTop.reference_settings`, `reference_run`). MuJoCo integrates the body-frame rates of the

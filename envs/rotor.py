@@ -44,17 +44,6 @@ FREE_INERTIA = Range(1e-4, 1e3)
 MIN_TURN_PER_STEP = 2 * float(np.finfo(float).eps) / 1e-8
 
 
-def round_step(h: float) -> float:
-    """A derived timestep rounded down to one significant digit (1, 2, ..., 9 times a power of ten, s).
-
-    Never larger than the rule's value, so its error bounds hold, and at most a factor 2 smaller. A step that stays
-    the same over a range of parameters is readable, reproducible from its printed value, and equal to the model
-    file's step at every default case (the rules are calibrated a hair above it there).
-    """
-    e = math.floor(math.log10(h))
-    return float(f"{math.floor(h / 10.0**e * (1 + 1e-12))}e{e}")
-
-
 # Most steps of a free-symmetric-top run (1.5e5 at the prolate default); the rates are slopes of phases and need no
 # whole turns.
 MAX_FREE_STEPS = 200_000
