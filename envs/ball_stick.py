@@ -187,12 +187,15 @@ class BallStickEnv(BlowEnv):
         after it the P5 values; during the 0.31 ms contact the stick's velocity is in between and the deviation
         is not scored, and ``info["predicted"]`` holds NaN): the negative deviation of the stick's velocities from
         the closed form.
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         Stick at rest at the origin along y; ball 2 mm from its face moving at ``ball_speed``.
 
     Episode End
         Truncated after the scenario's duration (impact + 3 contact times); terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (light-ball, ball-stops, heavy-ball), ``params`` (mass, length, ball_mass, ball_speed, offset),

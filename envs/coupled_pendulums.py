@@ -454,6 +454,7 @@ class CoupledPendulumsEnv(PendulumEnv):
     Rewards
         ``reward = -max_i |th_i - th_i,theory(t)| / max_i |th_i(0)|``, the theory being the linear normal-mode
         solution (O4/O7); ``info["measured"]["angles"]`` and ``info["predicted"]["angles"]`` hold both (rad).
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         At rest at (``amplitude1``, ``amplitude2``) (rad).
@@ -461,6 +462,8 @@ class CoupledPendulumsEnv(PendulumEnv):
     Episode End
         Truncated after 30.5 periods of the slowest excited mode, or 2.5 T_x if both modes are excited;
         terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (in-phase, anti-phase, beats, weak-coupling, strong-coupling), ``params`` (mass, length, k, d,

@@ -324,6 +324,7 @@ class CueStrikeEnv(BlowEnv):
         skid-then-roll path (less v0 tau / 2 for the pulse), relative to the skid distance s (the radius R for a
         ball that does not skid). ``info["measured"]`` and ``info["predicted"]`` hold x (m), v_x (m/s) and slip
         (m/s). The hops (see the module docstring) are visible in observation 1.
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         At rest on the cloth at its resting penetration, then struck during ``reset``: the first observation is
@@ -331,6 +332,8 @@ class CueStrikeEnv(BlowEnv):
 
     Episode End
         Truncated after the scenario's duration (pulse + 1.5 t_r, at least 50 ms); terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (centre, no-skid, topspin, backspin), ``params`` (radius, mass, mu, speed, height, g),

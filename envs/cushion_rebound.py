@@ -163,12 +163,15 @@ class CushionReboundEnv(CueStrikeEnv):
 
     Rewards
         As `CueStrikeEnv`: ``-|x - x_theory(t)| / max(|s|, R)`` after the rebound.
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         Rolling at ``speed`` toward +x at the resting height; the rebound happens during ``reset``.
 
     Episode End
         Truncated after the pulse + 1.5 times the time to roll again (at least 50 ms); terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (no-skid, equator, low, high), ``params`` (radius, mass, mu, speed, cushion_height, restitution,

@@ -345,12 +345,15 @@ class DoublePendulumEnv(PendulumEnv):
         ``reward = -max_i |hinge_i - hinge_i,theory(t)| / max(|th1(0)|, |th2(0)|)``, the theory being the linear
         normal-mode solution (O7); ``info["measured"]["angles"]`` and ``info["predicted"]["angles"]`` hold both
         (rad, hinge coordinates).
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         At rest with absolute rod angles (``amplitude1``, ``amplitude2``) (rad).
 
     Episode End
         Truncated after 30.5 periods of the slowest excited mode; terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (slow-mode, fast-mode, released, unequal), ``params`` (mass1, mass2, length1, length2,

@@ -348,12 +348,15 @@ class FreeAsymmetricTopEnv(FreeRotorEnv):
 
     Rewards
         ``reward = -|omega_B - omega_theory(t)| / |omega_theory(t)|`` (see ``info["reward_deviation"]``).
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         The case's (or given) ``omega`` in body axes, body unrotated. Deterministic.
 
     Episode End
         Truncated after 2.6 periods of omega2 (the validation run's duration); terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (``major-axis``, ``minor-axis``, ``intermediate-axis``), ``params`` (``I1``, ``I2``, ``I3``,

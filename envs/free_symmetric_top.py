@@ -386,6 +386,7 @@ class FreeSymmetricTopEnv(FreeRotorEnv):
         ``reward = -|omega_B - omega_theory(t)| / |omega_theory(t)|``: the negative relative deviation of the
         body rates from the closed form at the current time; ``info["reward_deviation"]`` holds it, and
         ``info["measured"]`` / ``info["predicted"]`` the two vectors.
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         The case's (or the given) ``omega`` in body axes, body unrotated at the origin. Deterministic.
@@ -393,6 +394,8 @@ class FreeSymmetricTopEnv(FreeRotorEnv):
     Episode End
         Truncated after five turns of the slower precession, at most 2e5 reference steps (the validation run's
         duration); terminated only if the simulation diverges (``info["diverged"] = True``).
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         See `ScenarioEnv`: ``case`` (``prolate``, ``oblate``), ``params`` (``I1``, ``I3``, ``omega``),

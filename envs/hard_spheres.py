@@ -487,6 +487,7 @@ class HardSpheresEnv(ScenarioEnv):
         r = x1 - x2 and the soft-contact solution (`analytic.scattering.soft_sphere_relative_motion`), in units
         of the contact distance a = r1 + r2; ``info["measured"]`` and ``info["predicted"]`` hold r as
         ``r_x, r_y, r_z`` (m).
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         Target at rest at the origin; the projectile touches it after 20 physics steps.
@@ -494,6 +495,8 @@ class HardSpheresEnv(ScenarioEnv):
     Episode End
         Truncated once the collision is over (20 steps of lead, twice the contact time pi/sqrt(k), 20 more
         steps); terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (head-on, equal-mass, light-projectile, heavy-projectile, heavy-projectile-short, grazing),

@@ -947,6 +947,7 @@ class HeavyTopEnv(RotorEnv):
     Rewards
         ``reward = -|theta - theta_theory(t)| / pi``: the negative deviation of the tilt from the closed form,
         normalised by pi; ``info["measured"]["theta"]`` and ``info["predicted"]["theta"]`` hold both (rad).
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         Tilt ``tilt`` from the upward vertical, rates (nutation_rate, precession sin(tilt), spin) in body axes.
@@ -954,6 +955,8 @@ class HeavyTopEnv(RotorEnv):
     Episode End
         Truncated after 3.3 nutation periods (of the small nutation about it, T5, if steady; the first fall, 0.6
         periods, for a falling top whose three would exceed 1e6 steps); terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (nutation, looping, slow-precession, fast-precession, sleeping, falling), ``params`` (mass, arm,

@@ -201,12 +201,15 @@ class MarbleShotEnv(BlowEnv):
         the pulse's centroid; as `StruckStickEnv`), 0 afterwards (no closed form for the stick's motion through
         the collisions; ``info["predicted"]`` then holds NaN): the negative deviation of the stick's pose
         from P1.
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         Stick at rest at the origin, marbles at rest 1 mm in front of its ends, then struck during ``reset``.
 
     Episode End
         Truncated when the stick has turned by 0.05 rad (at least 3 ms); terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (cop-at-a, near-centre), ``params`` (mass, length, impulse, offset), ``profile``, ``integrator``,

@@ -155,12 +155,15 @@ class SimplePendulumEnv(PendulumEnv):
     Rewards
         ``reward = -|th - th_theory(t)| / amplitude``; ``info["measured"]["angles"]`` and
         ``info["predicted"]["angles"]`` hold both (rad).
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         ``th = amplitude``, at rest.
 
     Episode End
         Truncated after 20.25 periods; terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (one-radian, small-amplitude, large-amplitude, near-inverted), ``params`` (length, amplitude,

@@ -367,12 +367,15 @@ class PendulumChainEnv(PendulumEnv):
     Rewards
         ``reward = -max_i |th_i - th_i,theory(t)| / |amplitude|``, the theory being the linear normal-mode solution
         (O7); ``info["measured"]["angles"]`` and ``info["predicted"]["angles"]`` hold both (rad).
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         Pendulum 1 at rest at ``amplitude`` (rad), the others hanging at rest: every mode is excited.
 
     Episode End
         Truncated after 30.5 periods of the lowest mode; terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (end-released, strong-coupling), ``params`` (n, mass, length, k, d, amplitude, g), ``profile``,

@@ -130,7 +130,9 @@ class PendulumEnergyTransferEnv(ClosedLoopTask, PendulumEnv):
         fixes it.
 
     Episode End
-        Truncated at T (a whole number of steps); terminated on divergence.
+        Terminated at T (a whole number of steps): T is the task's own end, where its whole reward is paid and
+        the observation's time left reaches 0, so nothing follows it to bootstrap from (gymnasium's
+        ``terminated``; ``truncated`` stays False). Also terminated on divergence (reward 0).
 
     Arguments
         ``params`` (CoupledPendulums': mass, length, k, d, amplitude1, amplitude2, g), ``regret``, ``profile``,
@@ -147,6 +149,7 @@ class PendulumEnergyTransferEnv(ClosedLoopTask, PendulumEnv):
     task_case = "beats"
     target_names = ("duration",)
     reward_terms = ("energy",)
+    horizon_ends_task = True  # the reward is E2 at T, and the observation counts down to it
     # Small enough that pendulum 2 stays below ~0.03 rad (linear to ~1e-3) over a transfer time.
     max_torque: ClassVar[float] = 0.01
 

@@ -192,12 +192,15 @@ class PivotedStickEnv(BlowEnv):
     Rewards
         ``reward = -|heading - omega t'| / pi - |r_pin| / L``, t' = t - tau/2: the negative deviation of the swing
         from the closed form, plus the pin's drift in stick lengths.
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         At rest along +y from the pivot, then struck during ``reset``.
 
     Episode End
         Truncated after a one-radian swing; terminated on divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (sweet-spot, centre, end, near-pivot), ``params`` (mass, length, impulse, strike), ``profile``,

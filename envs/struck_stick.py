@@ -225,6 +225,7 @@ class StruckStickEnv(BlowEnv):
         ``reward = -(|x - V t'| + |y|) / L - |heading - omega t'| / pi``, t' = t - tau/2 the time since the
         pulse's centroid: the negative deviation of the pose from the closed form. ``info["measured"]`` and
         ``info["predicted"]`` hold x (m), y (m) and heading (rad).
+        Each step's deviation counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
 
     Starting State
         At rest at the origin along y, then struck during ``reset``: the first observation is just after the
@@ -233,6 +234,8 @@ class StruckStickEnv(BlowEnv):
     Episode End
         Truncated after the scenario's duration (tau + 2.3 cusp periods 2 pi / |omega|); terminated on
         divergence.
+        The diverged step pays -10 for itself and for each step left, the worst the rest could score: blowing
+        up the simulation never pays (`ScenarioEnv`).
 
     Arguments
         ``case`` (quarter, end, near-centre), ``params`` (mass, length, impulse, offset), ``profile``,

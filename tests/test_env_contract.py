@@ -106,6 +106,23 @@ def test_closed_loop_tasks_say_whether_their_horizon_is_their_end(task_env_id):
     assert (terminated, truncated) == ((True, False) if inner.horizon_ends_task else (False, True))
 
 
+def test_an_energy_transfer_episode_terminates_at_T_where_its_whole_reward_is_paid():
+    """The reward is pendulum 2's energy at T and the observation counts down to T: T is the task's own end, so a
+    learner must not bootstrap past it (terminated, not truncated); a tracking task's horizon is a time limit."""
+    assert gym.make("rigidbench/PendulumEnergyTransfer-v0").unwrapped.horizon_ends_task
+    assert not gym.make("rigidbench/TopPrecession-v0").unwrapped.horizon_ends_task
+    env = gym.make("rigidbench/PendulumEnergyTransfer-v0")
+    obs, _ = env.reset(seed=0)
+    rewards = []
+    while True:
+        obs, reward, terminated, truncated, _ = env.step(np.zeros(1))
+        rewards.append(reward)
+        if terminated or truncated:
+            break
+    assert terminated and not truncated and obs[-1] == pytest.approx(0.0, abs=1e-12)
+    assert all(r == 0.0 for r in rewards[:-1]) and rewards[-1] > 0.0
+
+
 def test_render_fps_plays_the_simulation_in_real_time(validation_env_id):
     env = gym.make(validation_env_id)
     env.reset(seed=0)
