@@ -57,16 +57,18 @@ ROUNDOFF_DOMAIN_TEXT = (
 )
 
 
-def roundoff_outside(params: Mapping[str, Any], extent: float, amplitude: float) -> str | None:
+def roundoff_outside(params: Mapping[str, Any], extent: float, amplitude: float, gain: float = 1.0) -> str | None:
     """The double-precision domain's test (`ROUNDOFF_DOMAIN_TEXT`) from requested parameters: None inside, else a
-    phrase naming the parameters."""
+    phrase naming the parameters. `gain` (>= 1) multiplies rho where a check amplifies the round-off (the chain's
+    nearly degenerate modes)."""
     m, g, length, k, d = (float(params[x]) for x in ("mass", "g", "length", "k", "d"))
     rho = np.finfo(float).eps * extent * (m * g + k * d) / ((m * g * length + k * d * d) * abs(amplitude))
-    if rho <= ROUNDOFF_MAX:
+    if rho * gain <= ROUNDOFF_MAX:
         return None
+    amplified = f" x {gain:.3g}" if gain > 1 else ""
     return (
         f"amplitude {amplitude:g} rad with length = {length:g} m, d = {d:g} m, pivots up to {extent:g} m out "
-        f"(rho = {rho:.2g})"
+        f"(rho = {rho:.2g}{amplified})"
     )
 
 
