@@ -24,6 +24,7 @@ References
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,9 +48,9 @@ def centre_of_percussion(mass: float, inertia: float, offset: float) -> float:
     """Distance p (m) from the CM to the centre of percussion, on the far side from the blow: p = I / (M h).
 
     THEORY.md P2 ([H]: "p = I/(Mh)"; for the uniform stick p = l^2 / (3 h)). The point s = -p is at rest just
-    after an impulse at s = +h.
+    after an impulse at s = +h. A blow through the CM (h = 0) gives p = inf: no point of the body is at rest.
     """
-    return inertia / (mass * offset)
+    return inertia / (mass * offset) if offset != 0 else math.inf
 
 
 @dataclass(frozen=True)
@@ -108,7 +109,7 @@ def struck_stick(mass: float, inertia: float, impulse: float, offset: float) -> 
         com_velocity=impulse / mass,
         angular_velocity=omega,
         percussion_distance=p,
-        cusp_period=2 * np.pi / abs(omega),
+        cusp_period=2 * np.pi / abs(omega) if omega != 0 else math.inf,
         cusp_spacing=2 * np.pi * p,
     )
 

@@ -21,8 +21,9 @@ import numpy as np
 from rigidbench import contact
 from rigidbench.analytic import percussion
 from rigidbench.envs.planar import BlowEnv, PlanarMotion, body_state, free_body_motion, has_nan
-from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, positive
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass
+from rigidbench.scenario import Case, Check, Derived, Scenario
+from rigidbench.settings import round_step
 from rigidbench.simulate import Trajectory
 
 _COMPLIANCE = (
@@ -37,9 +38,24 @@ _CONSERVED = (
     "a potential force; measured 2e-6 to 4e-6, converged in dt"
 )
 CHECKS = (
-    Check("ball-velocity", "m/s", 5e-5, "abs", _COMPLIANCE + " (times u, in m/s)", "P5: u' = u - Pi / m"),
+    Check(
+        "ball-velocity",
+        "m/s",
+        5e-5,
+        "abs",
+        _COMPLIANCE + " (times u: 2.5e-5 u, in m/s; 5e-5 at the default 2 m/s)",
+        "P5: u' = u - Pi / m",
+    ),
     Check("stick-velocity", "m/s", 5e-5, "rel", _COMPLIANCE, "P5 + P1: V = Pi / M"),
-    Check("stick-angular-velocity", "rad/s", 5e-5, "rel", _COMPLIANCE, "P5 + P1: omega = -Pi h / I"),
+    Check(
+        "stick-angular-velocity",
+        "rad/s",
+        5e-5,
+        "abs",
+        _COMPLIANCE + "; 5e-5 |omega| + 1e-12 u / L (the state's round-off), absolute so that a blow through the "
+        "centre (omega = 0) is scored too",
+        "P5 + P1: omega = -Pi h / I",
+    ),
     Check(
         "momentum",
         "1",
@@ -51,6 +67,25 @@ CHECKS = (
     Check("energy", "1", 2e-5, "abs", _CONSERVED + "; relative to the initial energy", "P5, e = 1: energy conserved"),
 )
 _ALL = tuple(c.name for c in CHECKS)
+
+# The model file's contact (k = 1e8 1/s^2: t_c = pi / sqrt(k) = 0.314 ms, 314 steps of 1 us) and approach (2 mm at
+# 2 m/s: 1 ms, 3.18 contact times). The reference contact keeps the stick's turn during it, omega t_c, at most that
+# of the fastest default case (heavy-ball, |omega| = 6 rad/s): t_c = min(0.314 ms, OMEGA_TC / |omega|).
+CONTACT_TIME = np.pi / 1e4
+CONTACT_STEPS = 314
+APPROACH_CONTACTS = 1e-3 / CONTACT_TIME
+OMEGA_TC = 6.0 * CONTACT_TIME
+# MuJoCo's default solver tolerance, kept down to the default's contact deceleration u / t_c (2 m/s over 0.314 ms),
+# scaled below it.
+SOLVER_TOLERANCE = 1e-8
+DECELERATION_DEFAULT = 2.0 / CONTACT_TIME
+
+
+def _omega(p: Mapping[str, Any]) -> float:
+    """The stick's angular velocity after the impact (rad/s) from the requested parameters (P5 + P1)."""
+    inertia = percussion.uniform_rod_inertia(p["mass"], p["length"])
+    theory = percussion.ball_on_stick(p["mass"], inertia, p["offset"], p["ball_mass"], p["ball_speed"])
+    return float(theory.stick.angular_velocity)
 
 
 def _effective_mass(p: Mapping[str, Any]) -> float:
@@ -74,9 +109,14 @@ class BallStick(Scenario):
             Range(1e-3, 100.0),
             RodLength("stick", "stick"),
         ),
-        Param("ball_mass", "kg", "mass m of the ball", Range(1e-6, 1e3), ScaledBodyMass("ball")),
+        # Down to 1e-7 kg: the ball-stops case's ball is the stick's effective mass, >= M / 4.
+        Param("ball_mass", "kg", "mass m of the ball", Range(1e-7, 1e3), ScaledBodyMass("ball")),
         Param(
-            "ball_speed", "m/s", "speed u of the ball along +x before impact", positive(100.0), Numeric("ball_speed")
+            "ball_speed",
+            "m/s",
+            "speed u of the ball along +x before impact (it starts u x 1 ms before the contact: reference settings)",
+            Range(1e-6, 100.0),
+            Numeric("ball_speed"),
         ),
         Param(
             "offset",
@@ -84,6 +124,11 @@ class BallStick(Scenario):
             "distance h along the stick from its centre to the ball's line of approach, in [0, L/2)",
             Range(0.0, 50.0),
             Numeric("offset"),
+            within=Bound(
+                "[0, L/2): the ball hits the stick",
+                lambda p: Range(0.0, p["length"] / 2, high_open=True),
+                ("length",),
+            ),
         ),
     )
     cases = (
@@ -98,13 +143,47 @@ class BallStick(Scenario):
     )
     checks = CHECKS
 
-    def validate(self, params: Mapping[str, Any]) -> None:
-        if params["offset"] >= params["length"] / 2:
-            raise ValueError(
-                f"parameter 'offset' = {params['offset']:g} m is outside the valid range "
-                f"[0, {params['length'] / 2:g}) m (half the stick's length = {params['length']:g} m):"
-                " the ball must hit the stick"
-            )
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        u = params["ball_speed"]
+        omega = abs(_omega(params))
+        t_c = min(CONTACT_TIME, OMEGA_TC / omega) if omega > 0 else CONTACT_TIME
+        gap = u * t_c * APPROACH_CONTACTS
+        decel = u / t_c
+        return {
+            "contact_stiffness": Derived(
+                (np.pi / t_c) ** 2,
+                f"k = (pi / t_c)^2, t_c = min({CONTACT_TIME:.4g}, {OMEGA_TC:.3g} / |omega|) = {t_c:.4g} s (the stick "
+                f"turns by omega t_c <= {OMEGA_TC:.3g} rad during the contact, as in the fastest default case); "
+                f"|omega| = Pi h / I = {omega:.6g} rad/s",
+            ),
+            "timestep": Derived(
+                round_step(t_c / CONTACT_STEPS),
+                f"dt = t_c / {CONTACT_STEPS} rounded down to one digit (>= {CONTACT_STEPS} steps per contact: the "
+                "contact's switching errors <= 1e-5, measured)",
+            ),
+            "approach_gap": Derived(
+                gap,
+                f"gap = u t_c x {APPROACH_CONTACTS:.4g} = {gap:.6g} m (the ball reaches the stick "
+                f"{APPROACH_CONTACTS:.3g} contact times into the run, 1 ms at the defaults)",
+            ),
+            "solver_tolerance": Derived(
+                SOLVER_TOLERANCE * min(1.0, decel / DECELERATION_DEFAULT),
+                f"{SOLVER_TOLERANCE:g} x min(1, a / {DECELERATION_DEFAULT:.4g} m/s^2), a = u / t_c = {decel:.3g} m/s^2 "
+                "(MuJoCo's solver stops when its scaled gradient, an acceleration, is below its tolerance: see "
+                "pivoted-stick)",
+            ),
+        }
+
+    def apply_derived(self, spec: mujoco.MjSpec, name: str, value: float) -> None:
+        if name == "approach_gap":
+            spec.numeric("gap").data = [value]
+        elif name == "contact_stiffness":
+            for geom in ("ball", "stick"):
+                spec.geom(geom).solref = [-value, 0.0]
+        elif name == "solver_tolerance":
+            spec.option.tolerance = value
+        else:
+            super().apply_derived(spec, name, value)
 
     def check_model(self, model: mujoco.MjModel) -> None:
         solref = model.geom("ball").solref
@@ -132,7 +211,13 @@ class BallStick(Scenario):
         gap = float(stick.com_W[0, 0] - model.geom("stick").size[0] - model.geom("ball").size[0] - ball.com_W[0, 0])
         solref = model.geom("ball").solref
         t_contact = np.pi / np.sqrt(-solref[0]) if solref[0] < 0 else 10 * solref[0]
+        length = 2 * float(model.geom("stick").size[1])
+        omega = theory.stick.angular_velocity
         return {
+            "_tolerance": {
+                "stick-angular-velocity": 5e-5 * abs(omega) + 1e-12 * abs(u) / length,
+                "ball-velocity": 2.5e-5 * abs(u),
+            },
             "_theory": theory,
             "_t_hit": gap / u,
             "_t_contact": float(t_contact),

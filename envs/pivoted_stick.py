@@ -26,13 +26,15 @@ import numpy as np
 
 from rigidbench import pulse
 from rigidbench.analytic import percussion
-from rigidbench.envs.planar import BlowEnv, free_body_motion, wrap_angle
-from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.envs.planar import BlowEnv, free_body_motion, max_impulse, reference_pulse, wrap_angle
+from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition
+from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.simulate import Trajectory
 
 _PIN = (
-    "read 10 pin time constants (2 ms) after the 0.1 ms pulse, when the soft pin's response has decayed to "
+    "pulse tau = 1.2e-3 / |omega| rounded down and pin time constant tc = 2 tau (reference settings: 0.1 ms and "
+    "0.2 ms at the end-struck default, so omega tc <= 2.4e-3 everywhere); read 10 pin time constants after the "
+    "pulse, when the soft pin's response has decayed to "
     "~10 e^-10 ~ 5e-4 of its load and the pin yields only ~ a tc^2 ~ 1e-8 m (measured residuals <= 5e-8); "
     "the pulse's O(omega tau) share (THEORY.md F2 saw 5.3e-5 Pi with a 2 ms pulse read at its end) is "
     "O((omega tau)^2) ~ 1e-7 here, read after the pin has settled"
@@ -61,12 +63,44 @@ CHECKS = (
         1e-6,
         "abs",
         "largest distance of the pinned end from the pivot over the run: the soft pin yields ~ a tc^2 under the "
-        "centripetal acceleration a = omega^2 d_cm of the CM (tc = 0.2 ms: <~ 1e-7 m at |omega| <= 12 rad/s) "
-        "and the pulse",
+        "centripetal acceleration a = omega^2 d_cm of the CM and the pulse, a fixed fraction of L with tc = 2.4e-3 / "
+        "|omega| at most (reference settings; <~ 1e-7 L measured): tolerance 1e-6 L (1e-6 m at the default L = 1 m)",
         "P4: frictionless fixed pivot",
     ),
 )
 _ALL = tuple(c.name for c in CHECKS)
+
+# omega tau of the fastest default case (struck at the end: |omega| = 12 rad/s, tau = 0.1 ms), kept by the
+# reference pulse at any parameters (`planar.reference_pulse`); the pin's time constant is PIN_STEPS steps (2 tau).
+OMEGA_TAU = 1.2e-3
+PIN_STEPS = 10
+# MuJoCo's solver tolerance (the model file's, MuJoCo's default) and the smallest centripetal acceleration omega^2
+# L / 2 (m/s^2) among the default cases (near-pivot: 3 rad/s, L = 1 m), at and above which it is kept. MuJoCo ends
+# its constraint solver when the scaled gradient (an acceleration, m/s^2 here) is below the tolerance, and then
+# keeps the warm start: measured (census draws, |omega| ~ 1e-7 rad/s, pulse forces ~ 1e-9 N) the solver takes 0
+# iterations and the stick never moves (qvel exactly 0, the whole blow absorbed). The derived tolerance scales with
+# the motion's acceleration instead.
+SOLVER_TOLERANCE = 1e-8
+CENTRIPETAL_DEFAULT = 4.5
+# The smallest centripetal acceleration (m/s^2) at which MuJoCo's solver holds the pin to the checks' tolerances:
+# measured good (errors <= 5e-8) at 1e-11 m/s^2, degraded at <= 1e-13 (the domain's text); a decade of margin.
+MIN_CENTRIPETAL = 1e-10
+
+
+def _slow(p: Mapping[str, Any]) -> str | None:
+    """The solver-tolerance domain's test: None inside, else a phrase naming the parameters."""
+    omega = p["impulse"] * p["strike"] / (p["mass"] * p["length"] ** 2 / 3)
+    centripetal = omega**2 * p["length"] / 2
+    if centripetal >= MIN_CENTRIPETAL:
+        return None
+    return (
+        f"impulse = {p['impulse']:g} N s, strike = {p['strike']:g} m, mass = {p['mass']:g} kg, length = "
+        f"{p['length']:g} m (omega = {omega:.3g} rad/s, omega^2 L / 2 = {centripetal:.3g} m/s^2)"
+    )
+
+
+# Pivot drift tolerance per metre of stick (the pin's yield scales with L at a fixed omega tc).
+PIVOT_DRIFT = 1e-6
 
 
 class PivotedStick(Scenario):
@@ -85,13 +119,31 @@ class PivotedStick(Scenario):
             Range(1e-3, 100.0),
             RodLength("stick", "stick", from_origin=True),
         ),
-        Param("impulse", "N s", "impulse Pi of the blow, along +x (world)", positive(1e3), Numeric("impulse")),
+        Param(
+            "impulse",
+            "N s",
+            "impulse Pi of the blow, along +x (world)",
+            Range(1e-6, 1e3),
+            Numeric("impulse"),
+            within=Bound(
+                "[Pi_min(M, L), Pi_max(M, L)]: Pi_max keeps the pulse's accelerations (|omega| <= 3 Pi / (M L), "
+                "speeds <= 3 Pi / M over tau >= 6e-4 / |omega|) below 1e9, MuJoCo treating qacc > mjMAXVAL = 1e10 as "
+                "a divergence; Pi_min = M sqrt(32 L a_min / 9) keeps the centripetal acceleration >= a_min = "
+                f"{MIN_CENTRIPETAL:g} m/s^2 for a strike at L/4 or beyond (the solver-tolerance domain)",
+                lambda p: Range(
+                    max(1e-6, p["mass"] * np.sqrt(32 * p["length"] * MIN_CENTRIPETAL / 9)),
+                    max_impulse(3 / (p["mass"] * p["length"]), 3 / p["mass"], OMEGA_TAU),
+                ),
+                ("mass", "length"),
+            ),
+        ),
         Param(
             "strike",
             "m",
-            "distance d from the pivot along the stick to the strike point, in (0, L]",
-            positive(100.0),
+            "distance d from the pivot along the stick to the strike point, in [L/1000, L]",
+            Range(1e-6, 100.0),
             SitePosition("strike", 1),
+            within=Bound("[L/1000, L]: on the stick", lambda p: Range(p["length"] / 1000, p["length"]), ("length",)),
         ),
     )
     cases = (
@@ -116,13 +168,43 @@ class PivotedStick(Scenario):
         Case("near-pivot", "struck at L/4: J = -5 Pi/8", {"strike": lambda p: p["length"] / 4}, _ALL),
     )
     checks = CHECKS
+    domains = (
+        Domain(
+            "mujoco-solver-tolerance",
+            "P4 (MuJoCo: the constraint solver at tiny accelerations)",
+            f"the CM's centripetal acceleration omega^2 L / 2 >= {MIN_CENTRIPETAL:g} m/s^2: MuJoCo's solver stops when "
+            "its scaled gradient is below its tolerance (the derived one follows the acceleration), and below ~1e-13 "
+            "m/s^2 its result degrades whatever the tolerance, 0 included (measured, near-pivot, M = 1 .. 965 kg: "
+            "omega 2e-6 .. 3e-4 off and the pin yielding 5e-4 m at a = 1e-17 .. 1e-13 m/s^2; <= 5e-8 at a >= 1e-11)",
+            lambda p: _slow(p),
+        ),
+    )
 
-    def validate(self, params: Mapping[str, Any]) -> None:
-        if params["strike"] > params["length"]:
-            raise ValueError(
-                f"parameter 'strike' = {params['strike']:g} m is outside the valid range (0, {params['length']:g}] m "
-                "(the stick's length): the blow must hit the stick"
-            )
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        omega = params["impulse"] * params["strike"] / (params["mass"] * params["length"] ** 2 / 3)
+        derived = reference_pulse(omega, "Pi d / I_O, I_O = M L^2 / 3", OMEGA_TAU)
+        tc = PIN_STEPS * derived["timestep"].value
+        derived["pin_time_constant"] = Derived(
+            tc,
+            f"tc = {PIN_STEPS} dt = 2 tau (omega tc = {abs(omega) * tc:.3g}: the pin is rigid on the motion's time "
+            "scale, and settles 10 tc after the pulse)",
+        )
+        centripetal = omega**2 * params["length"] / 2
+        derived["solver_tolerance"] = Derived(
+            SOLVER_TOLERANCE * min(1.0, centripetal / CENTRIPETAL_DEFAULT),
+            f"{SOLVER_TOLERANCE:g} x min(1, a / {CENTRIPETAL_DEFAULT:g} m/s^2), a = omega^2 L / 2 = {centripetal:.3g} "
+            "m/s^2 the CM's centripetal acceleration the pin holds (MuJoCo's solver stops when its scaled gradient, an "
+            "acceleration, is below the tolerance: at a fixed 1e-8 a slow stick is never pushed at all)",
+        )
+        return derived
+
+    def apply_derived(self, spec: mujoco.MjSpec, name: str, value: float) -> None:
+        if name == "pin_time_constant":
+            spec.equality("pivot").solref = [value, 1.0]
+        elif name == "solver_tolerance":
+            spec.option.tolerance = value
+        else:
+            super().apply_derived(spec, name, value)
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         data.qpos[:] = [0, 0, 0, 1, 0, 0, 0]
@@ -143,6 +225,7 @@ class PivotedStick(Scenario):
         turned = omega * (n_read * model.opt.timestep - tau / 2)
         blow = percussion.pivot_reaction_impulse(mass, inertia_pivot, d_cm, strike, impulse)
         return {
+            "_tolerance": {"pivot-drift": PIVOT_DRIFT * float(model.geom("stick").size[1]) * 2},
             "_impulse": impulse,
             "_tau": tau,
             "_read": n_read,

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import mujoco
@@ -22,6 +22,8 @@ import numpy as np
 
 from rigidbench import frames, pulse
 from rigidbench.envs.base import ScenarioEnv
+from rigidbench.scenario import Derived
+from rigidbench.settings import round_step
 from rigidbench.simulate import Trajectory
 
 
@@ -222,3 +224,50 @@ def require_strike_on_stick(offset: float, length: float) -> None:
             f"parameter 'offset' = {offset:g} m is outside the valid range (0, {length / 2:g}] m (half the stick's "
             f"length = {length:g} m): the blow must hit the stick"
         )
+
+
+# ---- settings that follow the parameters (issue 13): the blow's pulse, the step, MuJoCo's acceleration limit ----
+
+# omega tau of the fastest default case of the free-stick scenarios (struck at the end: |omega| = 24 rad/s, tau =
+# 0.1 ms). A reference pulse keeps this omega tau whatever the parameters (rounded down to one digit: 1.2e-3 ..
+# 2.4e-3), so the pulse's errors, O((omega tau)^2) <= 1.4e-7 relative, and the run's step count stay those of the
+# default cases.
+OMEGA_TAU = 2.4e-3
+# Steps per pulse: the reference timestep is tau / 5 (the model files' 20 us for 0.1 ms), so free rotation after
+# the blow steps omega dt <= 4.8e-4 (RK4's phase error ~ omega T (omega dt)^4 ~ 1e-12).
+STEPS_PER_PULSE = 5
+# MuJoCo flags an acceleration (qacc) above mjMAXVAL = 1e10 as a divergence and resets the state; a blow of
+# impulse Pi over tau accelerates by Pi / (M tau). The impulse's dependent range keeps every acceleration of the
+# pulse below 1e9, a decade of margin.
+MAX_ACCELERATION = 1e9
+
+
+def reference_pulse(omega: float, what: str, omega_tau: float = OMEGA_TAU) -> dict[str, Any]:
+    """The reference pulse duration and timestep for a blow that leaves the body turning at `omega` (rad/s):
+    ``tau = omega_tau / |omega|`` rounded down to one digit, ``dt = tau / STEPS_PER_PULSE``. `what` says how omega
+    follows from the parameters (for the rules)."""
+    tau = round_step(omega_tau / abs(omega))
+    return {
+        "pulse_duration": Derived(
+            tau,
+            f"tau = {omega_tau:g} / |omega| rounded down to one digit (omega tau = {abs(omega) * tau:.3g}: the finite "
+            f"pulse's errors O((omega tau)^2) stay those of the default cases); |omega| = {what} = {abs(omega):.6g} "
+            "rad/s",
+        ),
+        "timestep": Derived(
+            tau / STEPS_PER_PULSE,
+            f"dt = tau / {STEPS_PER_PULSE} (whole steps per pulse; free rotation then omega dt = "
+            f"{abs(omega) * tau / STEPS_PER_PULSE:.3g}: RK4 phase error ~1e-12 over the run)",
+        ),
+    }
+
+
+def max_impulse(omega_per_impulse: float, speed_per_impulse: float, omega_tau: float = OMEGA_TAU) -> float:
+    """Largest impulse (N s) whose reference pulse keeps MuJoCo's accelerations below `MAX_ACCELERATION`: the
+    pulse lasts at least omega_tau / 2 / |omega| (one-digit rounding), so it accelerates by up to |omega|^2 /
+    (omega_tau / 2) (rad/s^2) and |omega| V / (omega_tau / 2) (m/s^2); omega and V are proportional to the impulse,
+    at `omega_per_impulse` (rad/s per N s) and `speed_per_impulse` (m/s per N s, the fastest point of the body)."""
+    half = omega_tau / 2
+    by_turn = np.sqrt(MAX_ACCELERATION * half) / omega_per_impulse
+    by_speed = np.sqrt(MAX_ACCELERATION * half / (omega_per_impulse * speed_per_impulse))
+    return float(min(by_turn, by_speed))

@@ -20,24 +20,26 @@ import numpy as np
 
 from rigidbench import pulse, signals
 from rigidbench.analytic import percussion
-from rigidbench.envs.planar import BlowEnv, free_body_motion, require_strike_on_stick
-from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.envs.planar import BlowEnv, free_body_motion, max_impulse, reference_pulse
+from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition
+from rigidbench.scenario import Case, Check, Derived, Scenario
 from rigidbench.simulate import Trajectory
 
 # The pulse: the force is fixed along world x (refsite), so the linear impulse is exact; it acts at a material
 # point that turns by theta(t) <= omega tau / 2 during the pulse, so the torque is -F h cos(theta): relative error
 # in omega ~ (omega tau)^2 / 40 <~ 2e-7 at the defaults (|omega| tau <= 2.4e-3). 1e-5 covers |omega| tau <~ 0.02.
 _PULSE = (
-    "pulse of tau = 0.1 ms at a material point that turns by <= omega tau / 2 while pushed: torque error "
-    "~ (omega tau)^2 / 40 <~ 2e-7 at the defaults; 1e-5 holds for |omega| tau <~ 0.02"
+    "pulse of tau = 2.4e-3 / |omega| rounded down (reference settings; 0.1 ms at the end-struck default) at a "
+    "material point that turns by <= omega tau / 2 while pushed: torque error ~ (omega tau)^2 / 40 <= 1.4e-7; 1e-5 "
+    "holds for |omega| tau <~ 0.02"
 )
 _EXACT = (
     "force direction fixed in the world (refsite) and constant within each step: the delivered linear impulse "
     "is exact; roundoff only"
 )
 _CUSPS = (
-    "set by omega, known to the pulse error above; free rotation afterwards (RK4, omega dt <= 5e-4: ~1e-12); "
+    "set by omega, known to the pulse error above; free rotation afterwards (RK4, omega dt = omega tau / 5 <= "
+    "4.8e-4: ~1e-12); "
     "cusps cubic-interpolated from the zero crossings of d|v|^2/dt computed from the state"
 )
 
@@ -115,13 +117,29 @@ class StruckStick(Scenario):
             Range(1e-3, 100.0),
             RodLength("stick", "stick"),
         ),
-        Param("impulse", "N s", "impulse Pi of the blow, along +x (world)", positive(1e3), Numeric("impulse")),
+        Param(
+            "impulse",
+            "N s",
+            "impulse Pi of the blow, along +x (world)",
+            Range(1e-6, 1e3),
+            Numeric("impulse"),
+            within=Bound(
+                "Pi <= Pi_max(M, L): the pulse's accelerations (|omega| <= 6 Pi / (M L), speeds <= 4 Pi / M over "
+                "tau >= 1.2e-3 / |omega|) stay below 1e9, MuJoCo treating qacc > mjMAXVAL = 1e10 as a divergence",
+                lambda p: Range(1e-6, max_impulse(6 / (p["mass"] * p["length"]), 4 / p["mass"])),
+                ("mass", "length"),
+            ),
+        ),
         Param(
             "offset",
             "m",
-            "distance h along the stick from its centre to the strike point, in (0, L/2]",
-            positive(50.0),
+            "distance h along the stick from its centre to the strike point, in [L/1000, L/2] (nearer the centre "
+            "the centre of percussion lies more than 80 L away)",
+            Range(1e-6, 50.0),
             SitePosition("strike", 1),
+            within=Bound(
+                "[L/1000, L/2]: on the stick", lambda p: Range(p["length"] / 1000, p["length"] / 2), ("length",)
+            ),
         ),
     )
     cases = (
@@ -138,8 +156,10 @@ class StruckStick(Scenario):
     )
     checks = CHECKS
 
-    def validate(self, params: Mapping[str, Any]) -> None:
-        require_strike_on_stick(params["offset"], params["length"])
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        inertia = params["mass"] * params["length"] ** 2 / 12
+        omega = params["impulse"] * params["offset"] / inertia
+        return reference_pulse(omega, "Pi h / I, I = M L^2 / 12")
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         data.qpos[:] = [0, 0, 0, 1, 0, 0, 0]
@@ -210,8 +230,9 @@ class StruckStickEnv(BlowEnv):
     Description
         A uniform stick (mass ``mass``, length ``length``) lies on frictionless ice along world y. ``reset``
         strikes it: a force pulse of impulse ``impulse`` along +x at ``offset`` from its centre, lasting
-        ``pulse_duration`` (0.1 ms; a custom numeric of the model). With zero action it then moves as THEORY.md
-        P1-P3 say: the CM at V = Pi/M, turning at omega = -Pi h/I, the point s = -p = -I/(M h) tracing a cycloid.
+        ``pulse_duration`` (2.4e-3 / |omega| rounded down: 0.1 ms at the default end strike). With zero action
+        it then moves as THEORY.md P1-P3 say: the CM at V = Pi/M, turning at omega = -Pi h/I, the point s = -p =
+        -I/(M h) tracing a cycloid.
 
     Observation Space
         See `BlowEnv`: CM position (x, y) (m), heading of the stick (rad), CM velocity (v_x, v_y) (m/s) and
@@ -239,7 +260,7 @@ class StruckStickEnv(BlowEnv):
 
     Arguments
         ``case`` (quarter, end, near-centre), ``params`` (mass, length, impulse, offset), ``profile``,
-        ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e. 0.2 ms), ``render_mode``.
+        ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e. 2 pulse durations), ``render_mode``.
 
     Version History
         v0: initial version.

@@ -176,8 +176,11 @@ class ScaledBodyMass:
 class RodLength:
     """Full length L (m) of a thin uniform rod along body y: a box geom of half-length L/2, and the body's
     explicit inertia M L^2 / 12 about the transverse axes x and z through its centre (the body's mass as set in
-    the spec). With `from_origin`, the rod runs from the body origin (a pivot) to y = L, its centre of mass and
-    geom at y = L/2; otherwise it is centred on the origin."""
+    the spec). The axial moment (about y) keeps its ratio to the transverse one (the model file's token value:
+    the rod never turns about its axis; at least 1e-14 kg m^2, MuJoCo's floor being 1e-15), so the inertia obeys
+    MuJoCo's triangle inequality A + B >= C at every length and mass. With `from_origin`, the rod runs from the
+    body origin (a pivot) to y = L, its centre of mass and geom at y = L/2; otherwise it is centred on the
+    origin."""
 
     body: str
     geom: str
@@ -190,7 +193,9 @@ class RodLength:
         geom.size = size
         body = spec.body(self.body)
         transverse = body.mass * float(value) ** 2 / 12
-        body.inertia = [transverse, body.inertia[1], transverse]
+        axial_share = float(body.inertia[1]) / float(body.inertia[0])
+        # MuJoCo refuses a moment below mjMINVAL = 1e-15; 1e-14 <= 2 x transverse down to M L^2 = 6e-14 kg m^2.
+        body.inertia = [transverse, max(axial_share * transverse, 1e-14), transverse]
         if self.from_origin:
             geom.pos = [0.0, float(value) / 2, 0.0]
             body.ipos = [0.0, float(value) / 2, 0.0]

@@ -258,6 +258,12 @@ class Scenario:
         """
         return {}
 
+    def apply_derived(self, spec: mujoco.MjSpec, name: str, value: float) -> None:
+        """Write a scenario-specific derived setting (a name `reference_settings` returns besides ``"timestep"``
+        and ``"pulse_duration"``, e.g. a constraint's time constant) into `spec`; always applied, like the pulse
+        (it is part of the model, not of the integrator)."""
+        raise ValueError(f"scenario '{self.slug}': no derived setting '{name}'")
+
     def check_model(self, model: mujoco.MjModel) -> None:
         """Validity of the compiled model under its settings (e.g. contact stiffness against the timestep).
 
@@ -467,7 +473,7 @@ class Scenario:
             elif name == "pulse_duration":
                 spec.numeric(pulse.PULSE_DURATION).data = [d.value]
             else:
-                raise ValueError(f"scenario '{self.slug}': no derived setting '{name}'")
+                self.apply_derived(spec, name, d.value)
             applied[name] = {"value": d.value, "rule": d.rule}
         if applied:
             spec.add_text(name=DERIVED_TEXT, data=json.dumps(applied, sort_keys=True))
