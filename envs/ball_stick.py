@@ -22,7 +22,7 @@ from rigidbench import contact
 from rigidbench.analytic import percussion
 from rigidbench.envs.planar import BlowEnv, PlanarMotion, body_state, free_body_motion, has_nan
 from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass
-from rigidbench.scenario import Case, Check, Derived, Scenario
+from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.settings import round_step
 from rigidbench.simulate import Trajectory
 
@@ -75,10 +75,41 @@ CONTACT_TIME = np.pi / 1e4
 CONTACT_STEPS = 314
 APPROACH_CONTACTS = 1e-3 / CONTACT_TIME
 OMEGA_TC = 6.0 * CONTACT_TIME
+# The ball's radius and the stick's half-width per metre of stick (the model file's 1 cm and 2 mm at L = 1 m).
+BALL_RADIUS = 0.01
+STICK_HALF_WIDTH = 0.002
+# Largest penetration of the ball into the stick, u t_c / pi, as a share of the stick's half-width.
+PENETRATION = 0.1
+# MuJoCo flags an acceleration above mjMAXVAL = 1e10 as a divergence and resets the state; the contact's peak
+# deceleration u sqrt(k) = u pi / t_c and the stick's angular acceleration ~ omega pi / (2 t_c) stay below 1e9.
+MAX_ACCELERATION = 1e9
 # MuJoCo's default solver tolerance, kept down to the default's contact deceleration u / t_c (2 m/s over 0.314 ms),
 # scaled below it.
 SOLVER_TOLERANCE = 1e-8
 DECELERATION_DEFAULT = 2.0 / CONTACT_TIME
+
+
+def _contact_time(p: Mapping[str, Any]) -> float:
+    """The reference contact time t_c (s): the model file's 0.314 ms, shorter where the stick turns faster than in
+    the fastest default case (omega t_c <= OMEGA_TC) or the ball would sink more than a tenth of the stick's
+    half-width into it (u t_c / pi <= PENETRATION w; 0.2 mm of 2 mm at the defaults)."""
+    omega = abs(_omega(p))
+    by_depth = np.pi * PENETRATION * STICK_HALF_WIDTH * p["length"] / p["ball_speed"]
+    return float(min(CONTACT_TIME, OMEGA_TC / omega if omega > 0 else np.inf, by_depth))
+
+
+def _too_fast(p: Mapping[str, Any]) -> str | None:
+    """The acceleration domain's test: None inside, else a phrase naming the parameters."""
+    t_c = _contact_time(p)
+    decel = p["ball_speed"] * np.pi / t_c
+    spin = abs(_omega(p)) * np.pi / (2 * t_c)
+    if max(decel, spin) <= MAX_ACCELERATION:
+        return None
+    return (
+        f"ball_speed = {p['ball_speed']:g} m/s, mass = {p['mass']:g} kg, ball_mass = {p['ball_mass']:g} kg, length = "
+        f"{p['length']:g} m, offset = {p['offset']:g} m (contact time {t_c:.3g} s: deceleration {decel:.3g} m/s^2, "
+        f"the stick's angular acceleration {spin:.3g} rad/s^2)"
+    )
 
 
 def _omega(p: Mapping[str, Any]) -> float:
@@ -114,9 +145,18 @@ class BallStick(Scenario):
         Param(
             "ball_speed",
             "m/s",
-            "speed u of the ball along +x before impact (it starts u x 1 ms before the contact: reference settings)",
+            "speed u of the ball along +x before impact (it starts 3.18 contact times before it: reference settings)",
             Range(1e-6, 100.0),
             Numeric("ball_speed"),
+            within=Bound(
+                "u <= sqrt(1e9 m/s^2 x 0.1 w), w = 0.002 L the stick's half-width: a contact short enough to keep the "
+                "ball within 0.1 w of the face decelerates it by u^2 / (0.1 w), below MuJoCo's divergence limit "
+                "(mjMAXVAL = 1e10) by a decade",
+                lambda p: Range(
+                    1e-6, min(100.0, np.sqrt(MAX_ACCELERATION * PENETRATION * STICK_HALF_WIDTH * p["length"]))
+                ),
+                ("length",),
+            ),
         ),
         Param(
             "offset",
@@ -142,19 +182,37 @@ class BallStick(Scenario):
         Case("heavy-ball", "a 1 kg ball: it carries on after the impact", {"ball_mass": 1.0}, _ALL),
     )
     checks = CHECKS
+    domains = (
+        Domain(
+            "mujoco-max-acceleration",
+            "P5 (MuJoCo: mjMAXVAL = 1e10)",
+            "the contact's peak deceleration u pi / t_c and the stick's angular acceleration |omega| pi / (2 t_c) <= "
+            "1e9 (m/s^2, rad/s^2), t_c the reference contact time: MuJoCo treats an acceleration above mjMAXVAL = "
+            "1e10 as a divergence and resets the state (an engine limit, not the theory's)",
+            _too_fast,
+        ),
+    )
 
     def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
         u = params["ball_speed"]
         omega = abs(_omega(params))
-        t_c = min(CONTACT_TIME, OMEGA_TC / omega) if omega > 0 else CONTACT_TIME
+        t_c = _contact_time(params)
         gap = u * t_c * APPROACH_CONTACTS
         decel = u / t_c
+        length = params["length"]
         return {
+            "geometry_scale": Derived(
+                length,
+                f"ball radius {BALL_RADIUS:g} L and stick half-width {STICK_HALF_WIDTH:g} L, L = {length:.6g} m (the "
+                "model file's 1 cm and 2 mm at L = 1 m): the point ball of P5 is a sphere whose contact point moves "
+                "along the tilting face by ~ R omega t_c, a fixed share of the lever arm h at any size",
+            ),
             "contact_stiffness": Derived(
                 (np.pi / t_c) ** 2,
-                f"k = (pi / t_c)^2, t_c = min({CONTACT_TIME:.4g}, {OMEGA_TC:.3g} / |omega|) = {t_c:.4g} s (the stick "
-                f"turns by omega t_c <= {OMEGA_TC:.3g} rad during the contact, as in the fastest default case); "
-                f"|omega| = Pi h / I = {omega:.6g} rad/s",
+                f"k = (pi / t_c)^2, t_c = min({CONTACT_TIME:.4g}, {OMEGA_TC:.3g} / |omega|, pi {PENETRATION:g} w / u)"
+                f" = {t_c:.4g} s (the stick turns by omega t_c <= {OMEGA_TC:.3g} rad during the contact, as in the "
+                f"fastest default case, and the ball sinks at most {PENETRATION:g} of the stick's half-width w = "
+                f"{STICK_HALF_WIDTH:g} L into it); |omega| = Pi h / I = {omega:.6g} rad/s",
             ),
             "timestep": Derived(
                 round_step(t_c / CONTACT_STEPS),
@@ -175,7 +233,10 @@ class BallStick(Scenario):
         }
 
     def apply_derived(self, spec: mujoco.MjSpec, name: str, value: float) -> None:
-        if name == "approach_gap":
+        if name == "geometry_scale":
+            spec.geom("ball").size = [BALL_RADIUS * value, 0.0, 0.0]
+            spec.geom("stick").size = [STICK_HALF_WIDTH * value, value / 2, STICK_HALF_WIDTH * value]
+        elif name == "approach_gap":
             spec.numeric("gap").data = [value]
         elif name == "contact_stiffness":
             for geom in ("ball", "stick"):
