@@ -126,7 +126,7 @@ def test_cli_sweep_prints_orders_and_writes_json(tmp_path, capsys):
         (["heavy-top", "--param", "spin=a,b"], "comma-separated numbers"),
         (["heavy-top", "--param", "spin=1e9"], "'spin'"),
         (["heavy-top", "--stiffness", "1e5"], "unknown parameter 'stiffness'"),
-        (["heavy-top", "--timesteps", "0.5"], "timestep"),
+        (["heavy-top", "--timesteps", "2000"], "timestep"),  # above MAX_TIMESTEP (1000 s)
     ],
 )
 def test_bad_sweep_input_exits_2_naming_the_problem(args, named, capsys):
