@@ -22,7 +22,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import linalg, special
+
+from rigidbench import lazy
+
+linalg = lazy.module("scipy.linalg")
+special = lazy.module("scipy.special")
+
 
 # ---------------------------------------------------------------------------------------------------------
 # O1 Exact large-amplitude pendulum period

@@ -23,7 +23,11 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import integrate
+
+from rigidbench import lazy
+
+integrate = lazy.module("scipy.integrate")
+
 
 # Gauss-Legendre order for the soft-sphere integral: after the substitution r = r_min + t^2 the integrand is
 # analytic on the closed interval, so the rule converges geometrically; 64 nodes reach ~1e-15 rad for

@@ -19,7 +19,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import special
+
+from rigidbench import lazy
+
+special = lazy.module("scipy.special")
+
 
 # ---------------------------------------------------------------------------------------------------------
 # Torque-free symmetric top (THEORY.md S1-S4; Wilcox section 11.9, eqs 11.41-11.51)

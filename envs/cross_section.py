@@ -23,10 +23,9 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from rigidbench import contact
 from rigidbench.analytic import scattering
 from rigidbench.contact import MIN_STEPS
-from rigidbench.envs.hard_spheres import HardSpheres
+from rigidbench.envs.hard_spheres import HardSpheres, stiffness_param
 from rigidbench.params import ContactSteps, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import final_states, initial_states
@@ -129,7 +128,8 @@ class CrossSection(Scenario):
     nthread: int | None = None
     # The pair's masses, radii, speed and contact are the hard-spheres scenario's parameters (one definition).
     params = (
-        *(_HARD[name] for name in ("m1", "m2", "r1", "r2", "speed", "stiffness")),
+        *(_HARD[name] for name in ("m1", "m2", "r1", "r2", "speed")),
+        stiffness_param(0.01, "the histograms compare with hard spheres"),
         Param(
             "contact_steps",
             "1",
@@ -166,15 +166,6 @@ class CrossSection(Scenario):
         ),
     )
     checks = CHECKS
-
-    def validate(self, params: Mapping[str, Any]) -> None:
-        contact.require_overlap_at_most(
-            params["speed"],
-            params["stiffness"],
-            params["r1"] + params["r2"],
-            0.01,
-            "the histograms compare with hard spheres",
-        )
 
     def check_model(self, model: mujoco.MjModel) -> None:
         HardSpheres().check_model(model)

@@ -25,15 +25,26 @@ import mujoco
 import numpy as np
 
 from rigidbench.analytic import scattering
-from rigidbench.contact import MIN_STEPS, ContactSpring, contact_spring, elastic_contact, require_overlap_at_most
+from rigidbench.contact import MIN_STEPS, ContactSpring, contact_spring, elastic_contact
 from rigidbench.envs.base import ScenarioEnv
-from rigidbench.params import BodyMass, ContactStiffness, GeomSize, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.params import BodyMass, Bound, ContactStiffness, GeomSize, Numeric, Param, Range
+from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
+from rigidbench.settings import round_step
 from rigidbench.simulate import Trajectory, final_states, initial_states, simulate
 
 # Steps of free flight before the spheres touch: the contact begins on a step boundary (the force's kink at
 # zero penetration then falls between RK4 steps instead of inside one).
 LEAD_STEPS = 20
+# RK4's error on each measured angle (rad), as the _RK4 reason states; the smallest soft shift (rad) whose exponent
+# is measured (its tolerance then <= 1e-2).
+ANGLE_ERROR = 5e-6
+SHIFT_MIN = 2.5e-4
+# MuJoCo's default solver tolerance, kept down to the defaults' peak contact deceleration u sqrt(k) (1 m/s at k =
+# 1e8 1/s^2), scaled below it (see pivoted-stick).
+SOLVER_TOLERANCE = 1e-8
+DECELERATION_DEFAULT = 1e4
+# Steps per contact time pi / sqrt(k) of the reference timestep (the model file's 0.5 us at k = 1e8 1/s^2).
+STEPS_PER_CONTACT = 628
 # Probe run for the k^-1/2 scaling: the same collision at stiffness k / SOFTER (4x the penetration).
 SOFTER = 16.0
 
@@ -93,8 +104,10 @@ CHECKS = (
         "1",
         0.02,
         "abs",
-        "fit of |theta - theta_hard| at k and k/16: the shift is c k^-1/2 (1 + O(u/(a sqrt(k) cos^2 alpha))), so "
-        "the two-point exponent is off by ~(c2 3e-3)/ln 16 <= 5e-3 at the default penetration (c2 <= 5 measured)",
+        "two-point exponent of |theta - theta_hard| at k and k/16 against the same exponent of the C8 quadrature "
+        "(exact: 0.5 only asymptotically, 0.588 at an overlap of 0.08 a); tolerance (5e-6 / d_k + 5e-6 / d_16) / ln "
+        "16 + 1e-3 per run, d the two shifts (RK4's angle error over each), 0.02 listed; the shift at k must be >= "
+        "2.5e-4 rad in the case regimes (the tolerance <= 1e-2 there; it grows as the shift shrinks outside them)",
         "C8 vs C5: theta_hard - theta_soft = pi (b/a) u / (a sqrt(k)) + O(1/k)",
     ),
     Check(
@@ -125,6 +138,44 @@ _COMMON = (
 
 def _a(p: Mapping[str, Any]) -> float:
     return p["r1"] + p["r2"]
+
+
+def _shift_regime(ratio: float) -> dict[str, Bound]:
+    """The regime of a case whose impact parameter is `ratio` a: stiffnesses whose first-order soft shift pi ratio u /
+    (a sqrt(k)) is at least SHIFT_MIN, within the stiffness's own range."""
+    return {
+        "stiffness": Bound(
+            f"k <= (pi {ratio:g} u / ({SHIFT_MIN:g} a))^2: a soft shift the exponent can be measured from",
+            lambda p: Range(1.0, (np.pi * ratio * p["speed"] / (SHIFT_MIN * _a(p))) ** 2),
+            ("speed", "r1", "r2"),
+        )
+    }
+
+
+# MuJoCo flags an acceleration above mjMAXVAL = 1e10 as a divergence: the contact's peak deceleration u sqrt(k)
+# stays below a tenth of it.
+MAX_ACCELERATION = 1e9
+
+
+def stiffness_param(overlap: float, why: str) -> Param:
+    """The contact stiffness k (1/s^2) of a sphere pair, within [(u / (overlap a))^2, (1e9 / u)^2]: the head-on
+    penetration u / sqrt(k) at most `overlap` of a = r1 + r2 (`why`), the contact's peak deceleration u sqrt(k) below
+    MuJoCo's divergence limit (mjMAXVAL = 1e10) by a decade. An empty range (a fast, small pair) means no contact
+    meets both: a census draws again."""
+    return Param(
+        "stiffness",
+        "1/s^2",
+        "contact spring k: penetration'' = -k penetration (direct solref (-k, 0))",
+        Range(1.0, 1e18),
+        ContactStiffness(("projectile", "target")),
+        within=Bound(
+            f"[(u / ({overlap:g} a))^2, (1e9 / u)^2], a = r1 + r2, u = speed: the head-on overlap u / sqrt(k) <= "
+            f"{overlap:g} a ({why}), the peak deceleration u sqrt(k) <= 1e9 m/s^2 (MuJoCo: mjMAXVAL = 1e10 is a "
+            "divergence)",
+            lambda p: Range((p["speed"] / (overlap * _a(p))) ** 2, (MAX_ACCELERATION / p["speed"]) ** 2),
+            ("speed", "r1", "r2"),
+        ),
+    )
 
 
 def _b0(p: Mapping[str, Any]) -> float:
@@ -158,14 +209,15 @@ class HardSpheres(Scenario):
             Range(1e-3, 1e4),
             Numeric("speed"),
         ),
-        Param("b", "m", "impact parameter, along +y, in [0, r1 + r2)", Range(0.0, 1e3), Numeric("b")),
         Param(
-            "stiffness",
-            "1/s^2",
-            "contact spring k: penetration'' = -k penetration (direct solref (-k, 0))",
-            Range(1.0, 1e18),
-            ContactStiffness(("projectile", "target")),
+            "b",
+            "m",
+            "impact parameter, along +y, in [0, r1 + r2)",
+            Range(0.0, 1e3),
+            Numeric("b"),
+            within=Bound("[0, r1 + r2): the spheres touch", lambda p: Range(0.0, _a(p), high_open=True), ("r1", "r2")),
         ),
+        stiffness_param(0.1, "the soft shift's first-order bound holds"),
     )
     cases = (
         Case(
@@ -176,44 +228,78 @@ class HardSpheres(Scenario):
             "m1 = m2, b = a/2: the 90-degree rule psi + zeta = pi/2",
             {"m1": 1.0, "m2": 1.0, "b": lambda p: 0.5 * _a(p)},
             (*_COMMON, "opening-angle", "soft-shift-exponent"),
+            ranges=_shift_regime(0.5),
+            regime=f"a soft shift of >= {SHIFT_MIN:g} rad, from which its exponent can be measured",
         ),
         Case(
             "light-projectile",
             "m1/m2 = 1/3, b = 0.6 a: one branch, psi up to pi",
             {"m1": 1.0, "m2": 3.0, "b": lambda p: 0.6 * _a(p)},
             (*_COMMON, "soft-shift-exponent"),
+            ranges=_shift_regime(0.6),
+            regime=f"a soft shift of >= {SHIFT_MIN:g} rad, from which its exponent can be measured",
         ),
         Case(
             "heavy-projectile",
             "m1/m2 = 3, b = 0.8 a > b0 (stretch branch); probe at b0 for psi_max = arcsin(1/3)",
             {"m1": 3.0, "m2": 1.0, "b": lambda p: 0.8 * _a(p)},
             (*_COMMON, "soft-shift-exponent", "max-lab-angle"),
+            ranges=_shift_regime(0.8),
+            regime=f"a soft shift of >= {SHIFT_MIN:g} rad, from which its exponent can be measured",
         ),
         Case(
             "heavy-projectile-short",
             "m1/m2 = 3, b = 0.3 a < b0 (short branch: the slow projectile of eq 9.53)",
             {"m1": 3.0, "m2": 1.0, "b": lambda p: 0.3 * _a(p)},
             (*_COMMON, "soft-shift-exponent", "max-lab-angle"),
+            ranges=_shift_regime(0.3),
+            regime=f"a soft shift of >= {SHIFT_MIN:g} rad, from which its exponent can be measured",
         ),
         Case(
             "grazing",
             "b = 0.99 a, m1/m2 = 1/2: small deflection, largest relative soft shift",
             {"m1": 1.0, "m2": 2.0, "b": lambda p: 0.99 * _a(p)},
             (*_COMMON, "soft-shift-exponent"),
+            ranges=_shift_regime(0.99),
+            regime=f"a soft shift of >= {SHIFT_MIN:g} rad, from which its exponent can be measured",
         ),
     )
     checks = CHECKS
+    domains = (
+        Domain(
+            "head-on",
+            "C2, C8 vs C5",
+            "b > 0: head-on every central force turns the projectile back or stops it, so the soft shift is 0 at every "
+            "k (its exponent is undefined) and an equal-mass projectile stops dead (its LAB angle is undefined)",
+            lambda p: None if p["b"] > 0 else f"b = {p['b']:g} m",
+            cases=("equal-mass", "light-projectile", "heavy-projectile", "heavy-projectile-short", "grazing"),
+        ),
+    )
 
     # ---- validation ---------------------------------------------------------------------------------------
 
-    def validate(self, params: Mapping[str, Any]) -> None:
-        a = _a(params)
-        if not params["b"] < a:
-            raise ValueError(
-                f"parameter 'b' = {params['b']:g} m is outside the valid range [0, r1 + r2) = [0, {a:g}) m: "
-                "the spheres would miss"
-            )
-        require_overlap_at_most(params["speed"], params["stiffness"], a, 0.1, "or use a lower speed")
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        t_c = np.pi / np.sqrt(params["stiffness"])
+        decel = params["speed"] * np.sqrt(params["stiffness"])
+        return {
+            "solver_tolerance": Derived(
+                SOLVER_TOLERANCE * min(1.0, decel / DECELERATION_DEFAULT),
+                f"{SOLVER_TOLERANCE:g} x min(1, a / {DECELERATION_DEFAULT:g} m/s^2), a = u sqrt(k) = {decel:.3g} m/s^2 "
+                "the contact's peak deceleration (MuJoCo's solver stops when its scaled gradient, an acceleration, is "
+                "below its tolerance: a fixed 1e-8 leaves slow collisions unconverged)",
+            ),
+            "timestep": Derived(
+                round_step(t_c / STEPS_PER_CONTACT),
+                f"dt = pi / sqrt(k) / {STEPS_PER_CONTACT} rounded down to one digit (>= {STEPS_PER_CONTACT} steps per "
+                f"contact, the model file's 0.5 us at k = 1e8 1/s^2: RK4 error (sqrt(k) dt)^2 / 24 <= 1e-6 across the "
+                f"contact's kinks); contact time pi / sqrt(k) = {t_c:.4g} s",
+            ),
+        }
+
+    def apply_derived(self, spec: mujoco.MjSpec, name: str, value: float) -> None:
+        if name != "solver_tolerance":
+            super().apply_derived(spec, name, value)
+        spec.option.tolerance = value
 
     def check_model(self, model: mujoco.MjModel) -> None:
         spring = self._spring(model)
@@ -297,6 +383,15 @@ class HardSpheres(Scenario):
         shift = float(scattering.soft_sphere_shift_first_order(b, a, spring.stiffness, speed)) if elastic else 0.0
         dpsi = abs((1 + x * np.cos(theta_hard)) / (1 + x * x + 2 * x * np.cos(theta_hard)))  # d psi / d theta
         bound = 1.5 * shift
+        # The exponent of the soft shift between k and k / SOFTER, exact (C8 quadrature at both stiffnesses; 0.5 only
+        # asymptotically: 0.588 at an overlap of 0.08 a), and its measurement error from RK4's <= 5e-6 rad per angle.
+        # (Head-on, b = 0, the shift is 0 at every k: the cases with this check refuse it, the `head-on` domain.)
+        exponent, exponent_tol = float("nan"), 0.02
+        if elastic and b > 0:
+            softer = float(scattering.soft_sphere_cm_angle(b, a, spring.stiffness / SOFTER, speed))
+            d_k, d_soft = abs(theta_hard - theta), abs(theta_hard - softer)
+            exponent = float(np.log(d_soft / d_k) / np.log(SOFTER))
+            exponent_tol = float((ANGLE_ERROR / d_k + ANGLE_ERROR / d_soft) / np.log(SOFTER) + 1e-3)
         out: dict[str, Any] = {
             "_elastic": elastic,
             "_duration": self._run_steps(model, self._contact_time(model)) * model.opt.timestep,
@@ -323,9 +418,10 @@ class HardSpheres(Scenario):
             "energy": 0.0,
             "restitution": 1.0,
             "opening-angle": np.pi / 2 if m1 == m2 else psi + zeta,
-            "soft-shift-exponent": 0.5,
+            "soft-shift-exponent": exponent,
             "max-lab-angle": scattering.max_lab_angle(x),
             "_tolerance": {
+                "soft-shift-exponent": exponent_tol,
                 "cm-angle-hard": bound + 5e-6,
                 # + bound^2: the second-order term, which dominates where psi is stationary (b0, x > 1).
                 "projectile-lab-angle-hard": dpsi * bound + bound**2 + 5e-6,

@@ -11,12 +11,14 @@ from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
-from scipy.optimize import minimize_scalar
 
+from rigidbench import lazy
 from rigidbench.envs import pendulums
 from rigidbench.envs.coupled_pendulums import CoupledPendulums
 from rigidbench.envs.pendulums import PendulumEnv
 from rigidbench.envs.task import ClosedLoopTask
+
+optimize = lazy.module("scipy.optimize")
 
 # Episode lengths sampled, as fractions of the free beat's transfer time T_x = pi / (omega_a - omega_s) (O4).
 DURATION_RANGE = (0.5, 1.0)
@@ -87,7 +89,7 @@ def bang_bang_schedule(
     phis = np.linspace(0.0, 2 * np.pi, PHASES, endpoint=False)
     best = phis[int(np.argmax(value(phis)))]
     step = 2 * np.pi / PHASES
-    res = minimize_scalar(lambda p: -value(p)[0], bounds=(best - step, best + step), method="bounded")
+    res = optimize.minimize_scalar(lambda p: -value(p)[0], bounds=(best - step, best + step), method="bounded")
     phi = float(res.x) if -res.fun >= value(best)[0] else float(best)
     proj = np.cos(phi) * g.real + np.sin(phi) * g.imag
     torques = np.where(proj >= 0, max_torque, -max_torque)

@@ -11,12 +11,14 @@ from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
-from scipy.optimize import brentq
 
+from rigidbench import lazy
 from rigidbench.analytic import percussion
 from rigidbench.envs.marble_shot import MarbleShot
 from rigidbench.envs.planar import free_body_motion
 from rigidbench.envs.task import ShotTask
+
+optimize = lazy.module("scipy.optimize")
 
 # Largest penalty of each reward term (relative to the target speed).
 ERROR_CAP = 10.0
@@ -127,7 +129,7 @@ class PercussionStrikeEnv(ShotTask):
     def theory_action(self) -> np.ndarray:
         """(h*, Pi*) normalised (class docstring)."""
         length = self.params["length"]
-        offset = brentq(lambda h: self._a_end(h, 1.0), length / 6, length / 2, xtol=1e-15, rtol=1e-15)
+        offset = optimize.brentq(lambda h: self._a_end(h, 1.0), length / 6, length / 2, xtol=1e-15, rtol=1e-15)
         impulse = self.target["speed"] / self._after_c(offset, 1.0).ball_velocity
         return np.array(
             [self._unlinear(offset / length, self.offset_range), self._unlinear(impulse, self.impulse_range)]

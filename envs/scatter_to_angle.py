@@ -37,8 +37,8 @@ class ScatterToAngleEnv(ShotTask):
         Box(1,), float64: the target LAB angle psi* (rad).
 
     Action Space
-        Box(-1, 1, (1,)), float64: the impact parameter, b = (a0 + 1)/2 * 0.98 a (m), a = r1 + r2; from head-on
-        to nearly grazing.
+        Box(-1, 1, (1,)), float64: the impact parameter, b = 1e-3 a + (a0 + 1)/2 (0.98 - 1e-3) a (m), a = r1 +
+        r2; from nearly head-on to nearly grazing.
 
     Rewards
         ``reward = reward_angle = -|psi - psi*|`` (rad), psi measured from the simulated velocities once the
@@ -70,6 +70,8 @@ class ScatterToAngleEnv(ShotTask):
     reward_terms = ("angle",)
     # Impact parameters reachable by the action, as a fraction of a = r1 + r2 (0.98: short of a grazing miss).
     max_impact: ClassVar[float] = 0.98
+    # Never exactly head-on: the scenario's soft-shift exponent is not defined at b = 0 (its `head-on` domain).
+    min_impact: ClassVar[float] = 1e-3
     largest_target: ClassVar[float] = 0.6  # rad
 
     def _action_space(self) -> gym.spaces.Box:
@@ -87,7 +89,9 @@ class ScatterToAngleEnv(ShotTask):
         return m1 / m2, a
 
     def _impact(self, action: np.ndarray) -> float:
-        return (float(action[0]) + 1) / 2 * self.max_impact * self._geometry()[1]
+        a = self._geometry()[1]
+        low = self.min_impact * a
+        return low + (float(action[0]) + 1) / 2 * (self.max_impact * a - low)
 
     def _best_impacts(self) -> list[float]:
         """The theory's impact parameters b (m) for the target (class docstring): the stretch branch first."""
@@ -107,7 +111,8 @@ class ScatterToAngleEnv(ShotTask):
     def theory_actions(self) -> list[np.ndarray]:
         """Both optima for a reachable target with x > 1 (stretch, then short branch); b0 otherwise."""
         _, a = self._geometry()
-        return [np.array([2 * b / (self.max_impact * a) - 1]) for b in self._best_impacts()]
+        low = self.min_impact * a
+        return [np.array([2 * (b - low) / (self.max_impact * a - low) - 1]) for b in self._best_impacts()]
 
     def _theory_reward(self) -> float:
         x, a = self._geometry()

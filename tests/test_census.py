@@ -12,7 +12,7 @@ from rigidbench.settings import round_step
 
 # Scenarios whose cross-parameter constraints are still checked in `validate` instead of being `within` bounds the
 # census can draw inside (issue 13, families in progress): strict, so the mark must go when they are fixed.
-UNBOUNDED = {"cross-section", "cue-strike", "hard-spheres"}
+UNBOUNDED = {"cue-strike"}
 
 
 @pytest.mark.parametrize(

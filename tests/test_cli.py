@@ -100,3 +100,16 @@ def test_list_shows_parameters_with_units_defaults_and_ranges(capsys):
 def test_python_dash_m_runs_the_same_cli():
     done = subprocess.run([sys.executable, "-m", "rigidbench", "list"], capture_output=True, text=True, check=False)
     assert done.returncode == 0 and "free-asymmetric-top" in done.stdout
+
+
+def test_listing_the_scenarios_does_not_import_scipy():
+    """Start-up (issue 14): scipy (~0.3 s to import) is imported on first use (`rigidbench.lazy`), so `rigidbench
+    list`, `--help` and registering the envs never pay for it."""
+    code = (
+        "import sys\n"
+        "from rigidbench import registry\n"
+        "registry.scenarios(); registry.register_envs()\n"
+        "print(sorted(m for m in sys.modules if m == 'scipy' or m.startswith('scipy.')))\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert proc.stdout.strip() == "[]", proc.stdout
