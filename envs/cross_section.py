@@ -137,8 +137,17 @@ class CrossSection(Scenario):
             "on a step boundary (CM angles to ~5e-6 rad at 20 steps; ~1e-4 rad when the end falls inside a step)",
             Range(MIN_STEPS, 1e4),
             ContactSteps("projectile"),
+            budget=True,
         ),
-        Param("n", "1", "number of collisions in the beam", Range(100, 1e7), Numeric("samples"), integer=True),
+        Param(
+            "n",
+            "1",
+            "number of collisions in the beam",
+            Range(100, 1e7),
+            Numeric("samples"),
+            integer=True,
+            budget=True,
+        ),
         Param(
             "seed",
             "1",
