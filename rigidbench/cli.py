@@ -910,7 +910,7 @@ def _dumps(doc: dict) -> str:
 
 
 def _raise_interrupted(signum: int, _frame: object) -> None:
-    from rigidbench.runner import Interrupted
+    from rigidbench.interrupt import Interrupted  # never rigidbench.runner: it may be half imported right now
 
     raise Interrupted(signum)
 
@@ -930,7 +930,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return _main(argv)
     except BaseException as exc:  # noqa: BLE001 - sorted below: everything a user can cause is one line
-        from rigidbench.runner import Interrupted
+        from rigidbench.interrupt import Interrupted
 
         if isinstance(exc, Interrupted):
             print(f"rigidbench: interrupted by {exc.name}", file=sys.stderr)

@@ -22,21 +22,13 @@ from typing import Any
 import mujoco
 
 from rigidbench import registry
+from rigidbench.interrupt import Interrupted
 from rigidbench.params import Value
 from rigidbench.results import ERROR, rows_of
 from rigidbench.scenario import Scenario
 from rigidbench.settings import Settings, profile
 
 Perturb = Callable[[mujoco.MjModel], None]
-
-
-class Interrupted(BaseException):
-    """SIGINT or SIGTERM during a run; the exit status is 128 + the signal number."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.status = 128 + signum
-        self.name = signal.Signals(signum).name
 
 
 @dataclass(frozen=True)
