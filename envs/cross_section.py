@@ -26,7 +26,7 @@ import numpy as np
 from rigidbench.analytic import scattering
 from rigidbench.contact import MIN_STEPS
 from rigidbench.envs.hard_spheres import HardSpheres, stiffness_param
-from rigidbench.params import ContactSteps, Numeric, Param, Range
+from rigidbench.params import Bound, ContactSteps, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import final_states, initial_states
 
@@ -114,6 +114,9 @@ class Beam:
     diverged: int
 
 
+# Fewest expected hits n / (1 + margin)^2 of a beam: the angle histograms need them for their goodness-of-fit.
+MIN_HITS = 100
+
 _HARD = {p.name: p for p in HardSpheres.params}
 
 
@@ -137,6 +140,7 @@ class CrossSection(Scenario):
             "on a step boundary (CM angles to ~5e-6 rad at 20 steps; ~1e-4 rad when the end falls inside a step)",
             Range(MIN_STEPS, 1e4),
             ContactSteps("projectile"),
+            integer=True,
             budget=True,
         ),
         Param(
@@ -162,6 +166,12 @@ class CrossSection(Scenario):
             "beam radius / (r1 + r2) - 1: the beam overfills the target so the hit fraction measures pi a^2",
             Range(0.0, 10.0),
             Numeric("margin"),
+            within=Bound(
+                f"[0, sqrt(n / {MIN_HITS}) - 1]: at least {MIN_HITS} of the n collisions hit (n / (1 + margin)^2), "
+                "enough for the angle histograms' goodness-of-fit tests",
+                lambda p: Range(0.0, max(0.0, np.sqrt(p["n"] / MIN_HITS) - 1.0)),
+                ("n",),
+            ),
         ),
     )
     cases = (

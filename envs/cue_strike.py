@@ -45,7 +45,7 @@ from rigidbench.params import (
     SphereRadius,
     positive,
 )
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.scenario import Case, Check, Domain, Scenario
 from rigidbench.simulate import Trajectory
 
 # Rolling is declared when the slip has fallen to this fraction of its initial value; under B2 that happens at
@@ -129,6 +129,27 @@ _SKID = tuple(c.name for c in CHECKS)
 _NO_SKID = ("initial-slip", "final-speed", "energy-lost", "residual-slip", "lift-height")
 
 
+# The skid checks need a sliding phase the run can see after the pulse: B2's roll time at least SKID_PULSES pulses.
+SKID_PULSES = 20
+# The cue's (and the cushion's) pulse duration in the model files (s).
+MODEL_PULSE = 1e-3
+
+
+def skid_outside(theory: percussion.SkidToRoll, tau: float, what: str) -> str | None:
+    """The skid domain's test on the motion after the blow: None when the roll time is >= SKID_PULSES pulses of
+    `tau` (s), else a phrase naming the parameters (`what`) and the numbers."""
+    if theory.time_to_roll >= SKID_PULSES * tau:
+        return None
+    return f"{what} (slip u0 = {theory.slip:.3g} m/s, roll time {theory.time_to_roll:.3g} s against a {tau:g} s pulse)"
+
+
+SKID_DOMAIN_TEXT = (
+    f"B2's roll time 2 |u0| / (7 mu g) >= {SKID_PULSES} pulses: the skid checks (initial slip, time to roll, skid "
+    "distance) measure a sliding phase after the blow; a blow near the no-skid height leaves a slip that rolls out "
+    "within the pulse (there the no-skid case's checks apply)"
+)
+
+
 def _no_skid(p: Mapping[str, Any]) -> float:
     return percussion.no_skid_height(p["radius"])
 
@@ -198,6 +219,19 @@ class CueStrike(Scenario):
         ),
     )
     checks = CHECKS
+    domains = (
+        Domain(
+            "skid",
+            "B2 (skid to roll)",
+            SKID_DOMAIN_TEXT,
+            lambda p: skid_outside(
+                percussion.cue_strike(p["radius"], p["mu"], p["g"], p["speed"], p["height"]),
+                MODEL_PULSE,
+                f"height = {p['height']:g} m (R = {p['radius']:g} m), mu = {p['mu']:g}, speed = {p['speed']:g} m/s",
+            ),
+            cases=("centre", "topspin", "backspin"),
+        ),
+    )
 
     def validate(self, params: Mapping[str, Any]) -> None:
         r, h = params["radius"], params["height"]

@@ -21,10 +21,19 @@ import numpy as np
 
 from rigidbench import pulse
 from rigidbench.analytic import percussion
-from rigidbench.envs.cue_strike import BALL_MASS, BALL_RADIUS, CueStrike, CueStrikeEnv, settle
+from rigidbench.envs.cue_strike import (
+    BALL_MASS,
+    BALL_RADIUS,
+    MODEL_PULSE,
+    SKID_DOMAIN_TEXT,
+    CueStrike,
+    CueStrikeEnv,
+    settle,
+    skid_outside,
+)
 from rigidbench.envs.cue_strike import CHECKS as CUE_CHECKS
 from rigidbench.params import GeomFriction, Gravity, Numeric, Param, Range, positive
-from rigidbench.scenario import Case, Check
+from rigidbench.scenario import Case, Check, Domain
 from rigidbench.simulate import Trajectory
 
 _CUE = {c.name: c for c in CUE_CHECKS}
@@ -42,6 +51,17 @@ CHECKS = (
 )
 _SKID = tuple(c.name for c in CHECKS)
 _NO_SKID = ("rebound-slip", "final-speed", "residual-slip", "lift-height")
+
+
+def _rebound(p: Mapping[str, Any]) -> percussion.SkidToRoll:
+    """B2's motion after an ideal cushion blow, from the requested parameters (a solid ball rolling in at speed)."""
+    radius, mass, v = p["radius"], p["mass"], p["speed"]
+    inertia = percussion.SOLID_SPHERE * mass * radius**2
+    impulse = -(1 + p["restitution"]) * mass * v
+    h = p["cushion_height"] - radius
+    return percussion.skid_to_roll(
+        radius, p["mu"], p["g"], v + impulse / mass, v / radius + impulse * h / inertia, percussion.SOLID_SPHERE
+    )
 
 
 class CushionRebound(CueStrike):
@@ -102,6 +122,20 @@ class CushionRebound(CueStrike):
         ),
     )
     checks = CHECKS
+    domains = (
+        Domain(
+            "skid",
+            "B2 (skid to roll, after the cushion)",
+            SKID_DOMAIN_TEXT,
+            lambda p: skid_outside(
+                _rebound(p),
+                MODEL_PULSE,
+                f"cushion_height = {p['cushion_height']:g} m (R = {p['radius']:g} m), mu = {p['mu']:g}, speed = "
+                f"{p['speed']:g} m/s, restitution = {p['restitution']:g}",
+            ),
+            cases=("equator", "low", "high"),
+        ),
+    )
 
     def validate(self, params: Mapping[str, Any]) -> None:
         r, h = params["radius"], params["cushion_height"]

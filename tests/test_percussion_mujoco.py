@@ -179,3 +179,16 @@ def test_pivoted_stick_refuses_accelerations_the_solver_cannot_resolve(capsys):
     argv = ["run", "pivoted-stick", "--set", "mass=964.89", "--set", "length=3.4642", "--set", "impulse=0.034"]
     assert cli.main([*argv, "--set", "strike=0.004", "--quiet"]) == cli.EXIT_USAGE
     assert "mujoco-solver-tolerance" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["cushion-rebound:equator", "--set", "cushion_height=0.040005"],  # issue 13: was KeyError 'time-to-roll'
+        ["cue-strike:centre", "--set", "height=0.0114"],  # near 2R/5: rolls within the 1 ms pulse
+    ],
+)
+def test_a_blow_that_rolls_out_within_the_pulse_is_refused_by_the_skid_domain(argv, capsys):
+    assert cli.main(["run", *argv, "--quiet"]) == cli.EXIT_USAGE
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "(skid)" in err and "height" in err
