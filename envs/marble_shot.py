@@ -30,7 +30,7 @@ import numpy as np
 from rigidbench import contact, pulse
 from rigidbench.analytic import percussion
 from rigidbench.envs.planar import BlowEnv, body_state, free_body_motion, require_strike_on_stick
-from rigidbench.params import Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
+from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
 from rigidbench.scenario import Case, Check, Scenario
 from rigidbench.simulate import Trajectory
 
@@ -115,6 +115,15 @@ class MarbleShot(Scenario):
             "struck at h = L/12: A's end moves forward at V/2 and pushes A too",
             {"offset": lambda p: p["length"] / 12},
             _ALL,
+            ranges={
+                "offset": Bound(
+                    "(0, L/6): between the centre and the centre of percussion, where A's end moves toward A",
+                    lambda p: Range(0.0, p["length"] / 6, low_open=True, high_open=True),
+                    ("length",),
+                )
+            },
+            regime="A is pushed: the end at A moves toward it only for a blow nearer the centre than L/6 (P2); "
+            "beyond, A stays at rest and its speed, 0, has no relative error",
         ),
     )
     checks = CHECKS

@@ -192,3 +192,10 @@ def test_a_blow_that_rolls_out_within_the_pulse_is_refused_by_the_skid_domain(ar
     assert cli.main(["run", *argv, "--quiet"]) == cli.EXIT_USAGE
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "(skid)" in err and "height" in err
+
+
+def test_marble_shot_near_centre_refuses_a_blow_that_cannot_push_marble_a(capsys):
+    """Issue 13: `marble-shot:near-centre --set offset=0.5` scored A's speed 0 against 0 with a relative tolerance
+    (error inf); beyond the centre of percussion (L/6) A is never pushed: outside the case's regime."""
+    assert cli.main(["run", "marble-shot:near-centre", "--set", "offset=0.5", "--quiet"]) == cli.EXIT_USAGE
+    assert "regime of case 'near-centre'" in capsys.readouterr().err
