@@ -53,15 +53,13 @@ _SKID = tuple(c.name for c in CHECKS)
 _NO_SKID = ("rebound-slip", "final-speed", "residual-slip", "lift-height")
 
 
-def _rebound(p: Mapping[str, Any]) -> percussion.SkidToRoll:
-    """B2's motion after an ideal cushion blow, from the requested parameters (a solid ball rolling in at speed)."""
-    radius, mass, v = p["radius"], p["mass"], p["speed"]
-    inertia = percussion.SOLID_SPHERE * mass * radius**2
-    impulse = -(1 + p["restitution"]) * mass * v
-    h = p["cushion_height"] - radius
-    return percussion.skid_to_roll(
-        radius, p["mu"], p["g"], v + impulse / mass, v / radius + impulse * h / inertia, percussion.SOLID_SPHERE
-    )
+def _rebound_slip(p: Mapping[str, Any]) -> float:
+    """The slip (m/s) an ideal cushion blow leaves on a solid ball rolling in at `speed`, from the requested
+    parameters: v' = -e v, spin' = v / R + J h / I with J = -(1 + e) M v, h = H - R."""
+    radius, v = p["radius"], p["speed"]
+    impulse_per_mass = -(1 + p["restitution"]) * v
+    spin = v / radius + impulse_per_mass * (p["cushion_height"] - radius) / (percussion.SOLID_SPHERE * radius**2)
+    return v + impulse_per_mass - radius * spin
 
 
 class CushionRebound(CueStrike):
@@ -128,7 +126,9 @@ class CushionRebound(CueStrike):
             "B2 (skid to roll, after the cushion)",
             SKID_DOMAIN_TEXT,
             lambda p: skid_outside(
-                _rebound(p),
+                _rebound_slip(p),
+                p["mu"],
+                p["g"],
                 MODEL_PULSE,
                 f"cushion_height = {p['cushion_height']:g} m (R = {p['radius']:g} m), mu = {p['mu']:g}, speed = "
                 f"{p['speed']:g} m/s, restitution = {p['restitution']:g}",

@@ -185,7 +185,7 @@ def test_pivoted_stick_refuses_accelerations_the_solver_cannot_resolve(capsys):
     "argv",
     [
         ["cushion-rebound:equator", "--set", "cushion_height=0.040005"],  # issue 13: was KeyError 'time-to-roll'
-        ["cue-strike:centre", "--set", "height=0.0114"],  # near 2R/5: rolls within the 1 ms pulse
+        ["cue-strike:centre", "--set", "height=0.01143"],  # at 2R/5 to 5 digits: rolls within the 1 ms pulse
     ],
 )
 def test_a_blow_that_rolls_out_within_the_pulse_is_refused_by_the_skid_domain(argv, capsys):
