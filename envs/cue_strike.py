@@ -37,6 +37,7 @@ from rigidbench.analytic import percussion
 from rigidbench.envs.planar import BlowEnv, PlanarMotion, dot, free_body_motion
 from rigidbench.params import (
     ActuatorGear,
+    Bound,
     GeomFriction,
     Gravity,
     Numeric,
@@ -44,7 +45,6 @@ from rigidbench.params import (
     Range,
     ScaledBodyMass,
     SphereRadius,
-    positive,
 )
 from rigidbench.scenario import Case, Check, Domain, Scenario
 from rigidbench.simulate import Trajectory
@@ -132,6 +132,8 @@ _NO_SKID = ("initial-slip", "final-speed", "energy-lost", "residual-slip", "lift
 
 # The skid checks need a sliding phase the run can see after the pulse: B2's roll time at least SKID_PULSES pulses.
 SKID_PULSES = 5
+# Longest skid a run follows (s): the reference run lasts 1.5 roll times at 10 us steps, <= 1e6 steps.
+MAX_ROLL_TIME = 6.0
 # The cue's (and the cushion's) pulse duration in the model files (s).
 MODEL_PULSE = 1e-3
 
@@ -142,13 +144,14 @@ def skid_outside(slip: float, mu: float, g: float, tau: float, what: str) -> str
     time alone, not `percussion.skid_to_roll`, whose skid distance overflows at mu ~ 1e-200.)"""
     decel = mu * g * (1.0 + 1.0 / percussion.SOLID_SPHERE)
     t_r = abs(slip) / decel if decel > 0 else math.inf
-    if t_r >= SKID_PULSES * tau:
+    if SKID_PULSES * tau <= t_r <= MAX_ROLL_TIME:
         return None
     return f"{what} (slip u0 = {slip:.3g} m/s, roll time {t_r:.3g} s against a {tau:g} s pulse)"
 
 
 SKID_DOMAIN_TEXT = (
-    f"B2's roll time 2 |u0| / (7 mu g) >= {SKID_PULSES} pulses: the skid checks (initial slip, time to roll, skid "
+    f"B2's roll time 2 |u0| / (7 mu g) >= {SKID_PULSES} pulses and <= {MAX_ROLL_TIME:g} s (a run of <= 1e6 steps, "
+    "and 1.5 roll times long): the skid checks (initial slip, time to roll, skid "
     "distance) measure a sliding phase after the blow; a blow near the no-skid height leaves a slip that rolls out "
     "within the pulse (there the no-skid case's checks apply)"
 )
@@ -177,6 +180,32 @@ BALL_RADIUS = Param(
     "radius", "m", "radius R of the solid ball (I = 2/5 M R^2)", Range(1e-3, 1.0), SphereRadius("ball", "ball")
 )
 BALL_MASS = Param("mass", "kg", "mass M of the ball", Range(1e-6, 100.0), ScaledBodyMass("ball"))
+# Coulomb friction from nearly frictionless (a skid of 2 m/s lasts ~60 s on Earth at mu = 1e-3) to rubber on rubber.
+FRICTION = Param(
+    "mu",
+    "1",
+    "Coulomb friction coefficient between ball and cloth (sliding = static)",
+    Range(1e-3, 2.0),
+    GeomFriction(("ball", "table")),
+)
+# From the Moon's surface gravity / 100 to 10 g.
+TABLE_GRAVITY = Param("g", "m/s^2", "gravitational acceleration (along -z)", Range(1e-2, 100.0), Gravity())
+
+
+def skid_speeds(slip_per_speed: tuple[float, float]) -> Bound:
+    """The speed's dependent range for blows whose slip is `slip_per_speed` = (smallest, largest) |u0| / v of the
+    cases: the skid lasts at least SKID_PULSES pulses and at most MAX_ROLL_TIME (B2: t_r = |u0| / (3.5 mu g))."""
+    low, high = slip_per_speed
+    return Bound(
+        f"[{3.5 * SKID_PULSES * MODEL_PULSE / low:.3g} mu g, {3.5 * MAX_ROLL_TIME / high:.3g} mu g] (s^2 mu g, "
+        f"m/s): the skid to rolling lasts >= {SKID_PULSES} pulses (measurable after the blow) and <= "
+        f"{MAX_ROLL_TIME:g} s (a run of <= 1e6 steps)",
+        lambda p: Range(
+            max(1e-3, 3.5 * SKID_PULSES * MODEL_PULSE * p["mu"] * p["g"] / low),
+            min(20.0, 3.5 * MAX_ROLL_TIME * p["mu"] * p["g"] / high),
+        ),
+        ("mu", "g"),
+    )
 
 
 class CueStrike(Scenario):
@@ -189,22 +218,29 @@ class CueStrike(Scenario):
     params = (
         BALL_RADIUS,
         BALL_MASS,
+        FRICTION,
         Param(
-            "mu",
-            "1",
-            "Coulomb friction coefficient between ball and cloth (sliding = static)",
-            positive(2.0),
-            GeomFriction(("ball", "table")),
+            "speed",
+            "m/s",
+            "CoM speed v0 right after the strike (impulse M v0)",
+            Range(1e-3, 20.0),
+            Numeric("speed"),
+            # |u0| / v0 = |1 - 5h / (2R)|: 0.5 (topspin) .. 2.25 (backspin) over the skidding cases.
+            within=skid_speeds((0.5, 2.25)),
         ),
-        Param("speed", "m/s", "CoM speed v0 right after the strike (impulse M v0)", positive(20.0), Numeric("speed")),
         Param(
             "height",
             "m",
             "height h of the cue's line above the ball's centre (negative: below), |h| < R",
             Range(-1.0, 1.0, low_open=True, high_open=True),
             ActuatorGear("cue", 4),
+            within=Bound(
+                "(-R, R): the cue hits the ball",
+                lambda p: Range(-p["radius"], p["radius"], low_open=True, high_open=True),
+                ("radius",),
+            ),
         ),
-        Param("g", "m/s^2", "gravitational acceleration (along -z)", positive(100.0), Gravity()),
+        TABLE_GRAVITY,
     )
     cases = (
         Case("centre", "struck through the centre (h = 0): skids, loses 2/7 of its energy", {"height": 0.0}, _SKID),
@@ -238,14 +274,6 @@ class CueStrike(Scenario):
             cases=("centre", "topspin", "backspin"),
         ),
     )
-
-    def validate(self, params: Mapping[str, Any]) -> None:
-        r, h = params["radius"], params["height"]
-        if not -r < h < r:
-            raise ValueError(
-                f"parameter 'height' = {h:g} m is outside the valid range ({-r:g}, {r:g}) m "
-                f"(|height| < radius = {r:g} m): the cue must hit the ball"
-            )
 
     def check_model(self, model: mujoco.MjModel) -> None:
         solref = model.geom("ball").solref

@@ -24,15 +24,18 @@ from rigidbench.analytic import percussion
 from rigidbench.envs.cue_strike import (
     BALL_MASS,
     BALL_RADIUS,
+    FRICTION,
     MODEL_PULSE,
     SKID_DOMAIN_TEXT,
+    TABLE_GRAVITY,
     CueStrike,
     CueStrikeEnv,
     settle,
     skid_outside,
+    skid_speeds,
 )
 from rigidbench.envs.cue_strike import CHECKS as CUE_CHECKS
-from rigidbench.params import GeomFriction, Gravity, Numeric, Param, Range, positive
+from rigidbench.params import Bound, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Domain
 from rigidbench.simulate import Trajectory
 
@@ -72,31 +75,33 @@ class CushionRebound(CueStrike):
     params = (
         BALL_RADIUS,
         BALL_MASS,
-        Param(
-            "mu",
-            "1",
-            "Coulomb friction coefficient between ball and cloth",
-            positive(2.0),
-            GeomFriction(("ball", "table")),
-        ),
+        FRICTION,
         Param(
             "speed",
             "m/s",
             "speed v of the ball, rolling without slip, toward the cushion",
-            positive(20.0),
+            Range(1e-3, 20.0),
             Numeric("speed"),
+            # |u'| / v = |(1 + e) (5h / (2R) - 1) + ... |: from 0.5 (H = 1.2 R, e = 0) to 2 (the equator, e = 1) over
+            # the skidding cases.
+            within=skid_speeds((0.5, 2.0)),
         ),
         Param(
             "cushion_height",
             "m",
             "height H of the cushion's nose above the table, 0 < H < 2R",
-            positive(2.0),
+            Range(1e-6, 2.0),
             Numeric("cushion_height"),
+            within=Bound(
+                "(0, 2R): the cushion touches the ball",
+                lambda p: Range(0.0, 2 * p["radius"], low_open=True, high_open=True),
+                ("radius",),
+            ),
         ),
         Param(
             "restitution", "1", "coefficient of restitution e of the cushion", Range(0.0, 1.0), Numeric("restitution")
         ),
-        Param("g", "m/s^2", "gravitational acceleration (along -z)", positive(100.0), Gravity()),
+        TABLE_GRAVITY,
     )
     cases = (
         Case(
@@ -136,14 +141,6 @@ class CushionRebound(CueStrike):
             cases=("equator", "low", "high"),
         ),
     )
-
-    def validate(self, params: Mapping[str, Any]) -> None:
-        r, h = params["radius"], params["cushion_height"]
-        if not 0 < h < 2 * r:
-            raise ValueError(
-                f"parameter 'cushion_height' = {h:g} m is outside the valid range (0, {2 * r:g}) m "
-                f"(the ball's diameter): the cushion must touch the ball"
-            )
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
         settle(model, data)

@@ -110,6 +110,8 @@ def settings_of(rows: Iterable[Mapping[str, Any]]) -> list[Setting]:
             continue
         error = row["error"]
         error = math.inf if error is None or error == "inf" else float(error)
+        if math.isnan(error):  # a measurement that failed (max(0.0, nan) would be 0.0: the best error of all)
+            error = math.inf
         check = row["check"]
         s.checks[check] = max(s.checks.get(check, 0.0), error)
         if row.get("tolerance") is not None:

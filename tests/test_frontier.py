@@ -113,3 +113,24 @@ def test_cheapest_answers_the_cheapest_setting_below_the_target_or_says_none_doe
     assert b.cheapest is None and b.best is settings[0] and b.best_error == 1e-10
     with pytest.raises(ValueError, match="positive"):
         frontier.cheapest(settings, 0.0, refs)
+
+
+def test_a_check_whose_measurement_failed_counts_as_an_infinite_error_never_the_best():
+    """A run too short to measure a check gives NaN (or null in JSON); max(0.0, nan) is 0.0 in Python, which made
+    'RK4 at 256 x the reference step' the cheapest heavy-top setting for the mean precession."""
+    point = {
+        "scenario": "heavy-top",
+        "integrator": "RK4",
+        "case": "nutation",
+        "param": {},
+        "timestep": 0.0256,
+        "reference_timestep": 1e-4,
+    }
+    rows = [
+        {"point": point, "status": "fail", "check": "mean-precession", "error": float("nan"), "tolerance": 1e-6},
+        {"point": point, "status": "fail", "check": "theta-max", "error": None, "tolerance": 1e-6},
+        {"point": point, "status": "pass", "check": "theta-min", "error": 0.0, "tolerance": 1e-6},
+    ]
+    (setting,) = frontier.settings_of(rows)
+    assert setting.checks["mean-precession"] == math.inf and setting.checks["theta-max"] == math.inf
+    assert setting.error == math.inf
