@@ -115,7 +115,7 @@ class Beam:
 
 
 # Fewest expected hits n / (1 + margin)^2 of a beam: the angle histograms need them for their goodness-of-fit.
-MIN_HITS = 100
+MIN_HITS = 50
 
 _HARD = {p.name: p for p in HardSpheres.params}
 
@@ -140,7 +140,6 @@ class CrossSection(Scenario):
             "on a step boundary (CM angles to ~5e-6 rad at 20 steps; ~1e-4 rad when the end falls inside a step)",
             Range(MIN_STEPS, 1e4),
             ContactSteps("projectile"),
-            integer=True,
             budget=True,
         ),
         Param(

@@ -76,7 +76,9 @@ class CueShotEnv(ShotTask):
 
     env_id = "rigidbench/CueShot-v0"
     scenario_cls = CueStrike
-    task_case = "centre"
+    # The no-skid case: its checks are those of a blow at any height (the skid ones need a sliding phase, which
+    # the agent's strike near 2R/5 may not leave: cue-strike's skid domain), and its theory action is the task's.
+    task_case = "no-skid"
     target_names = ("speed",)
     reward_terms = ("speed", "skid")
     # Action ranges: |h| <= 0.8 R (the cue must hit the ball well inside its rim); v0 in [0.25, 3] m/s.

@@ -10,20 +10,7 @@ from rigidbench.params import Range
 from rigidbench.scenario import OutsideDomain
 from rigidbench.settings import round_step
 
-# Scenarios whose cross-parameter constraints are still checked in `validate` instead of being `within` bounds the
-# census can draw inside (issue 13, families in progress): strict, so the mark must go when they are fixed.
-UNBOUNDED = {"cue-strike"}
-
-
-@pytest.mark.parametrize(
-    "slug",
-    [
-        pytest.param(s, marks=pytest.mark.xfail(strict=True, reason="constraint not a within bound"))
-        if s in UNBOUNDED
-        else s
-        for s in sorted(registry.scenarios())
-    ],
-)
+@pytest.mark.parametrize("slug", sorted(registry.scenarios()))
 def test_every_drawn_set_resolves_inside_the_printed_ranges(slug):
     scenario = registry.get(slug)
     rng = np.random.default_rng(7)
