@@ -10,6 +10,7 @@ from rigidbench.params import Range
 from rigidbench.scenario import OutsideDomain
 from rigidbench.settings import round_step
 
+
 @pytest.mark.parametrize("slug", sorted(registry.scenarios()))
 def test_every_drawn_set_resolves_inside_the_printed_ranges(slug):
     scenario = registry.get(slug)
