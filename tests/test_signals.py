@@ -37,3 +37,23 @@ def test_param_check_names_parameter_value_and_range():
     with pytest.raises(ValueError, match="expected a number"):
         p.check([1.0, 2.0])
     assert p.parse("2.5") == 2.5
+
+
+def test_a_signal_wrapped_by_the_code_it_landed_in_still_ends_in_one_line(monkeypatch, capsys):
+    """A SIGINT during `import mujoco` lands inside a ctypes call, which turns the handler's exception into
+    ctypes.ArgumentError("argument 1: Interrupted: 2"): the command still ends with the one line and 130."""
+    import ctypes
+    import signal
+
+    from rigidbench import cli
+
+    def parse(argv):
+        try:
+            cli._raise_interrupted(signal.SIGINT, None)
+        except BaseException as exc:  # what ctypes does with an exception raised while converting an argument
+            raise ctypes.ArgumentError(f"argument 1: {type(exc).__name__}: {exc}") from None
+
+    monkeypatch.setattr(cli, "_main", parse)
+    monkeypatch.setattr(cli, "_SIGNALLED", [])
+    assert cli.main(["list"]) == 130
+    assert capsys.readouterr().err == "rigidbench: interrupted by SIGINT\n"
