@@ -23,7 +23,7 @@ from rigidbench.analytic import percussion
 from rigidbench.envs.planar import BlowEnv, PlanarMotion, body_state, free_body_motion, has_nan
 from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import round_step
+from rigidbench.settings import MAX_ACCELERATION, round_step
 from rigidbench.simulate import Trajectory
 
 _COMPLIANCE = (
@@ -80,9 +80,8 @@ BALL_RADIUS = 0.01
 STICK_HALF_WIDTH = 0.002
 # Largest penetration of the ball into the stick, u t_c / pi, as a share of the stick's half-width.
 PENETRATION = 0.1
-# MuJoCo flags an acceleration above mjMAXVAL = 1e10 as a divergence and resets the state; the contact's peak
-# deceleration u sqrt(k) = u pi / t_c and the stick's angular acceleration ~ omega pi / (2 t_c) stay below 1e9.
-MAX_ACCELERATION = 1e9
+# The contact's peak deceleration u sqrt(k) = u pi / t_c and the stick's angular acceleration ~ omega pi / (2 t_c)
+# stay below settings.MAX_ACCELERATION (mjMAXVAL / 10).
 # MuJoCo's default solver tolerance, kept down to the default's contact deceleration u / t_c (2 m/s over 0.314 ms),
 # scaled below it.
 SOLVER_TOLERANCE = 1e-8
@@ -241,8 +240,6 @@ class BallStick(Scenario):
         elif name == "contact_stiffness":
             for geom in ("ball", "stick"):
                 spec.geom(geom).solref = [-value, 0.0]
-        elif name == "solver_tolerance":
-            spec.option.tolerance = value
         else:
             super().apply_derived(spec, name, value)
 

@@ -58,11 +58,9 @@ _NO_SKID = ("rebound-slip", "final-speed", "residual-slip", "lift-height")
 
 def _rebound_slip(p: Mapping[str, Any]) -> float:
     """The slip (m/s) an ideal cushion blow leaves on a solid ball rolling in at `speed`, from the requested
-    parameters: v' = -e v, spin' = v / R + J h / I with J = -(1 + e) M v, h = H - R."""
-    radius, v = p["radius"], p["speed"]
-    impulse_per_mass = -(1 + p["restitution"]) * v
-    spin = v / radius + impulse_per_mass * (p["cushion_height"] - radius) / (percussion.SOLID_SPHERE * radius**2)
-    return v + impulse_per_mass - radius * spin
+    parameters: J = -(1 + e) M v at h = H - R above the centre gives u' = (1 + e) v (5h / (2R) - 1)."""
+    h = p["cushion_height"] - p["radius"]
+    return (1 + p["restitution"]) * p["speed"] * (h / (percussion.SOLID_SPHERE * p["radius"]) - 1)
 
 
 class CushionRebound(CueStrike):
@@ -82,7 +80,7 @@ class CushionRebound(CueStrike):
             "speed v of the ball, rolling without slip, toward the cushion",
             Range(1e-3, 20.0),
             Numeric("speed"),
-            # |u'| / v = |(1 + e) (5h / (2R) - 1) + ... |: from 0.5 (H = 1.2 R, e = 0) to 2 (the equator, e = 1) over
+            # |u'| / v = (1 + e) |5h / (2R) - 1|: from 0.5 (h = R/5 or 3R/5, e = 0) to 2 (the equator, e = 1) over
             # the skidding cases.
             within=skid_speeds((0.5, 2.0)),
         ),

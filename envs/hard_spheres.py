@@ -29,7 +29,7 @@ from rigidbench.contact import MIN_STEPS, ContactSpring, contact_spring, elastic
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.params import BodyMass, Bound, ContactStiffness, GeomSize, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import round_step
+from rigidbench.settings import MAX_ACCELERATION, round_step
 from rigidbench.simulate import Trajectory, final_states, initial_states, simulate
 
 # Steps of free flight before the spheres touch: the contact begins on a step boundary (the force's kink at
@@ -152,11 +152,6 @@ def _shift_regime(ratio: float) -> dict[str, Bound]:
             ("speed", "r1", "r2"),
         )
     }
-
-
-# MuJoCo flags an acceleration above mjMAXVAL = 1e10 as a divergence: the contact's peak deceleration u sqrt(k)
-# stays below a tenth of it.
-MAX_ACCELERATION = 1e9
 
 
 def stiffness_param(overlap: float, why: str) -> Param:
@@ -301,11 +296,6 @@ class HardSpheres(Scenario):
                 f"contact's kinks); contact time pi / sqrt(k) = {t_c:.4g} s",
             ),
         }
-
-    def apply_derived(self, spec: mujoco.MjSpec, name: str, value: float) -> None:
-        if name != "solver_tolerance":
-            super().apply_derived(spec, name, value)
-        spec.option.tolerance = value
 
     def check_model(self, model: mujoco.MjModel) -> None:
         spring = self._spring(model)

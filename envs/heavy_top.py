@@ -23,7 +23,7 @@ from rigidbench.analytic import tops
 from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia
 from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Bound, Gravity, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import round_step
+from rigidbench.settings import MAX_ACCELERATION, round_step
 from rigidbench.simulate import Trajectory
 
 # Reference timestep (`HeavyTop.reference_settings`, `reference_run`). MuJoCo integrates the body-frame rates of the
@@ -387,11 +387,8 @@ def _run_length(p: Mapping[str, Any]) -> str | None:
     return None
 
 
-# MuJoCo flags an acceleration (qacc) above mjMAXVAL = 1e10 as a divergence and resets the state ("Nan, Inf or huge
-# value in QACC"): a real engine limit. The body-frame angular acceleration of the top is at most
-# |I1 - I3| |omega3| |omega_perp|max / I1 + M g h / I1 (Euler's equations, THEORY.md R7, with the gravity torque);
-# refused above a tenth of the limit.
-MAX_ACCELERATION = 1e9
+# The body-frame angular acceleration of the top is at most |I1 - I3| |omega3| |omega_perp|max / I1 + M g h / I1
+# (Euler's equations, THEORY.md R7, with the gravity torque); refused above settings.MAX_ACCELERATION (mjMAXVAL / 10).
 
 
 def _acceleration(p: Mapping[str, Any]) -> str | None:

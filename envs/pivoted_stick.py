@@ -201,8 +201,6 @@ class PivotedStick(Scenario):
     def apply_derived(self, spec: mujoco.MjSpec, name: str, value: float) -> None:
         if name == "pin_time_constant":
             spec.equality("pivot").solref = [value, 1.0]
-        elif name == "solver_tolerance":
-            spec.option.tolerance = value
         else:
             super().apply_derived(spec, name, value)
 

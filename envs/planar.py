@@ -23,7 +23,7 @@ import numpy as np
 from rigidbench import frames, pulse
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.scenario import Derived
-from rigidbench.settings import round_step
+from rigidbench.settings import MAX_ACCELERATION, round_step
 from rigidbench.simulate import Trajectory
 
 
@@ -236,10 +236,6 @@ OMEGA_TAU = 2.4e-3
 # Steps per pulse: the reference timestep is tau / 5 (the model files' 20 us for 0.1 ms), so free rotation after
 # the blow steps omega dt <= 4.8e-4 (RK4's phase error ~ omega T (omega dt)^4 ~ 1e-12).
 STEPS_PER_PULSE = 5
-# MuJoCo flags an acceleration (qacc) above mjMAXVAL = 1e10 as a divergence and resets the state; a blow of
-# impulse Pi over tau accelerates by Pi / (M tau). The impulse's dependent range keeps every acceleration of the
-# pulse below 1e9, a decade of margin.
-MAX_ACCELERATION = 1e9
 
 
 def reference_pulse(omega: float, what: str, omega_tau: float = OMEGA_TAU) -> dict[str, Any]:

@@ -22,7 +22,6 @@ Whether the rows were produced by the jobs and settings the invocation plans is 
 
 from __future__ import annotations
 
-import errno
 import fcntl
 import json
 import os
@@ -34,6 +33,7 @@ from typing import Any
 
 import mujoco
 
+from rigidbench.outputs import write_all as _write_all
 from rigidbench.results import _jsonable
 
 FORMAT = "rigidbench-journal/2"
@@ -139,15 +139,6 @@ def append(path: str, job: str, rows: Iterable[dict[str, Any]]) -> None:
         raise JournalError(
             f"cannot append to journal {path}: {exc.strerror}; it holds the jobs finished before this one"
         ) from None
-
-
-def _write_all(fd: int, data: bytes) -> None:
-    view = memoryview(data)
-    while view:
-        n = os.write(fd, view)
-        if n <= 0:
-            raise OSError(errno.EIO, "short write")
-        view = view[n:]
 
 
 def read(path: str, kind: str) -> Journal:

@@ -138,7 +138,7 @@ def write_bytes(path: str, data: bytes, option: str = "output") -> None:
     if path == STDOUT:
         try:
             sys.stdout.flush()
-            _write_all(sys.stdout.fileno(), data)
+            write_all(sys.stdout.fileno(), data)
         except OSError as exc:
             raise OutputError(f"{option} -: cannot write to standard output: {exc.strerror}") from None
         return
@@ -147,7 +147,7 @@ def write_bytes(path: str, data: bytes, option: str = "output") -> None:
         try:
             fd = os.open(target, os.O_WRONLY)
             try:
-                _write_all(fd, data)
+                write_all(fd, data)
             finally:
                 os.close(fd)
         except OSError as exc:
@@ -161,7 +161,7 @@ def write_bytes(path: str, data: bytes, option: str = "output") -> None:
         raise OutputError(f"{option} {path}: cannot write in {directory}: {exc.strerror}") from None
     try:
         try:
-            _write_all(fd, data)
+            write_all(fd, data)
             os.fsync(fd)
             os.fchmod(fd, _mode_for(target))
         finally:
@@ -176,7 +176,7 @@ def write_bytes(path: str, data: bytes, option: str = "output") -> None:
     _fsync_directory(directory)
 
 
-def _write_all(fd: int, data: bytes) -> None:
+def write_all(fd: int, data: bytes) -> None:
     """Write every byte (`os.write` may write fewer than asked); a write that makes no progress is an error."""
     view = memoryview(data)
     while view:

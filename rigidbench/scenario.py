@@ -249,12 +249,15 @@ class Scenario:
 
     def reference_settings(self, params: Mapping[str, Value]) -> dict[str, Derived]:
         """Settings that follow the parameters: ``"timestep"`` (s) from the fastest time scale and the integrator's
-        error bound for the checks' tolerances, ``"pulse_duration"`` (s) from an omega tau bound.
+        error bound for the checks' tolerances, ``"pulse_duration"`` (s) from an omega tau bound,
+        ``"solver_tolerance"`` (MuJoCo's ``opt.tolerance``) from the accelerations the constraint solver must resolve
+        (it stops when its scaled gradient is below the tolerance: a fixed 1e-8 leaves slow motions unconverged);
+        other names are scenario-specific (`apply_derived`).
 
         A derived timestep is used unless the settings give one (a profile such as ``mujoco-default``, the
         user's ``--timestep``, a sweep point); a derived pulse duration is always used (it is part of the blow,
-        not of the integrator). Both are recorded with every result (``settings["derived"]``). Empty by default:
-        the model file's values.
+        not of the integrator); a derived solver tolerance gives way to a profile's or the user's (applied after).
+        All are recorded with every result (``settings["derived"]``). Empty by default: the model file's values.
         """
         return {}
 
@@ -472,6 +475,8 @@ class Scenario:
                 spec.option.timestep = d.value
             elif name == "pulse_duration":
                 spec.numeric(pulse.PULSE_DURATION).data = [d.value]
+            elif name == "solver_tolerance":
+                spec.option.tolerance = d.value  # a profile's or the user's tolerance (applied after) still wins
             else:
                 self.apply_derived(spec, name, d.value)
             applied[name] = {"value": d.value, "rule": d.rule}

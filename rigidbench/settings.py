@@ -58,6 +58,11 @@ MUJOCO_DEFAULT_TIMESTEP = 0.002
 # Samples in the thorough profile: a goodness-of-fit test with ~20 bins then resolves bin probabilities to ~1 %.
 THOROUGH_SAMPLES = 100_000
 
+# MuJoCo flags a joint acceleration (qacc) above mjMAXVAL = 1e10 as a divergence and resets the state ("Nan, Inf or
+# huge value in QACC"): an engine limit, not the theory's. Scenarios keep every acceleration of their motion (a blow's
+# pulse, a contact's peak deceleration, a top's gyroscopic acceleration) below a tenth of it.
+MAX_ACCELERATION = 1e9
+
 # Largest timestep accepted (s), to catch a typo: MuJoCo accepts anything. Reference timesteps follow the parameters
 # (`Scenario.reference_settings`), and the slowest the ranges allow, a 100 m pendulum at g = 1e-6 m/s^2 (period
 # 17 h), steps 60 s; 1000 s leaves a sweep's ladder room above that.
