@@ -25,7 +25,6 @@ from rigidbench.envs.cue_strike import (
     BALL_MASS,
     BALL_RADIUS,
     FRICTION,
-    MODEL_PULSE,
     SKID_DOMAIN_TEXT,
     TABLE_GRAVITY,
     CueStrike,
@@ -130,9 +129,7 @@ class CushionRebound(CueStrike):
             SKID_DOMAIN_TEXT,
             lambda p: skid_outside(
                 _rebound_slip(p),
-                p["mu"],
-                p["g"],
-                MODEL_PULSE,
+                p,
                 f"cushion_height = {p['cushion_height']:g} m (R = {p['radius']:g} m), mu = {p['mu']:g}, speed = "
                 f"{p['speed']:g} m/s, restitution = {p['restitution']:g}",
             ),
@@ -160,6 +157,7 @@ class CushionRebound(CueStrike):
     def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
         out = super().predict(model, data)
         out["rebound-slip"] = out.pop("initial-slip")
+        out["_tolerance"]["rebound-slip"] = out["_tolerance"].pop("initial-slip")
         return out
 
     def control(self, model: mujoco.MjModel, timestep: float, nstep: int) -> np.ndarray:

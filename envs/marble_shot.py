@@ -21,6 +21,7 @@ flies off at 14.8 m/s. "A undisturbed" holds for the blow, or for marbles much l
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -31,7 +32,8 @@ from rigidbench import contact, pulse
 from rigidbench.analytic import percussion
 from rigidbench.envs.planar import BlowEnv, body_state, free_body_motion, require_strike_on_stick
 from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
-from rigidbench.scenario import Case, Check, Scenario
+from rigidbench.scenario import Case, Check, Derived, Scenario
+from rigidbench.settings import MAX_ACCELERATION, round_step
 from rigidbench.simulate import Trajectory
 
 _C_HIT = (
@@ -52,7 +54,8 @@ CHECKS = (
         1e-6,
         "abs",
         "the stick point at A's end right after the 5 us pulse, V - omega s_A from the measured V and omega: the "
-        "pulse turns the stick by <= |omega| tau / 2 ~ 2e-5 rad, torque error ~ (omega tau)^2 ~ 1e-9",
+        "pulse turns the stick by <= |omega| tau / 2 ~ 2e-5 rad, torque error ~ (omega tau)^2 ~ 1e-9. 1e-6 m/s at the "
+        "default shot (V = Pi / M = 4 m/s), in units of V elsewhere (the settings follow T = L / V)",
         "P2: v(s) = (Pi/M)(1 + s h / rho^2), zero at s = -p; P6 rule 2: p = l at h = l/3",
     ),
     Check(
@@ -75,6 +78,81 @@ CHECKS = (
 )
 _ALL = tuple(c.name for c in CHECKS)
 
+# ---- settings that follow the parameters (issue 13) ----------------------------------------------------------
+#
+# The shot has one length, the stick's L, one speed, V = Pi / M, and so one time scale T = L / V (0.25 s for the
+# model file's 250 g meter stick struck with 1 N s). The model's geometry (marble radius 8 mm, gap 1 mm, the stick's
+# half-thickness 2 mm), its marbles' mass (5 g = M / 50: marbles much lighter than the stick, as in P6) and its
+# settings (contact stiffness 1e9 1/s^2, RK4 at 0.5 us, a 5 us blow) are kept in units of L, M and T, so every shot
+# is the default one to scale and keeps its accuracy; only MuJoCo's absolute limits bound the impulse.
+DEFAULT_LENGTH = 1.0
+DEFAULT_MASS = 0.25
+DEFAULT_SPEED = 4.0  # Pi / M at the defaults (m/s)
+DEFAULT_TIME_SCALE = DEFAULT_LENGTH / DEFAULT_SPEED
+MARBLE_RADIUS = 0.008  # in units of L
+MARBLE_GAP = 0.001
+STICK_HALF_WIDTH = 0.002
+MARBLE_MASS = 0.02  # in units of M
+MODEL_STIFFNESS = 1e9
+MODEL_TIMESTEP = 5e-7
+PULSE_STEPS = 10
+SOLVER_TOLERANCE = 1e-8  # MuJoCo's default, the model file's
+# Largest accelerations of the default shot: the blow's, V / tau = 8e5 m/s^2 and omega / tau = 1.6e6 rad/s^2 (the
+# marbles' contacts ~2.3e5 m/s^2). They scale as V^2 / L and V^2 / L^2; the rounded step can halve tau.
+BLOW_ACCELERATION = 8e5
+BLOW_ANGULAR_ACCELERATION = 1.6e6
+
+
+def _speeds(p: Mapping[str, Any]) -> Range:
+    """The dependent range of V = Pi / M (m/s) for a stick of length L: the blow's accelerations (x 2 for the step's
+    rounding) below MAX_ACCELERATION, and a step of at most 0.5 s (V >= 1e-6 L / s)."""
+    ratio = p["length"] / DEFAULT_LENGTH
+    high = DEFAULT_SPEED * min(
+        math.sqrt(MAX_ACCELERATION / (2 * BLOW_ACCELERATION) * ratio),
+        math.sqrt(MAX_ACCELERATION / (2 * BLOW_ANGULAR_ACCELERATION)) * ratio,
+    )
+    return Range(1e-6 * p["length"], high)
+
+
+def _impulses(p: Mapping[str, Any]) -> Range:
+    speeds = _speeds(p)
+    return Range(p["mass"] * speeds.low, min(1e3, p["mass"] * speeds.high))
+
+
+def marble_settings(params: Mapping[str, Any]) -> dict[str, Derived]:
+    """The reference settings of a stick of mass M and length L struck with impulse Pi (`DEFAULT_*` at the model's)."""
+    length, mass = params["length"], params["mass"]
+    speed = params["impulse"] / mass
+    scale = (length / speed) / DEFAULT_TIME_SCALE
+    dt = round_step(MODEL_TIMESTEP * scale * (1 + 1e-9))
+    k = MODEL_STIFFNESS / scale**2
+    accel = (speed / DEFAULT_SPEED) ** 2 / (length / DEFAULT_LENGTH)
+    why = f"T = L / (Pi / M) = {length / speed:.6g} s, {scale:.6g} times the default shot's"
+    return {
+        "geometry_scale": Derived(
+            length,
+            f"marble radius {MARBLE_RADIUS:g} L, gap {MARBLE_GAP:g} L, stick half-thickness {STICK_HALF_WIDTH:g} L, "
+            f"L = {length:.6g} m (the model file's 8 mm, 1 mm and 2 mm at L = 1 m)",
+        ),
+        "marble_mass": Derived(
+            MARBLE_MASS * mass,
+            f"m = M / {1 / MARBLE_MASS:g} = {MARBLE_MASS * mass:.6g} kg (the model file's 5 g marbles on a 250 g "
+            "stick: marbles much lighter than the stick, as P6 has them)",
+        ),
+        "contact_stiffness": Derived(
+            k, f"k = {MODEL_STIFFNESS:g} (T_0 / T)^2 = {k:.6g} 1/s^2 ({why}): the contact keeps its share of T"
+        ),
+        "timestep": Derived(dt, f"dt = {MODEL_TIMESTEP:g} s x T / T_0 rounded down to one digit ({why})"),
+        "pulse_duration": Derived(
+            PULSE_STEPS * dt, f"tau = {PULSE_STEPS} dt (5 us at the default shot): the blow keeps its share of T"
+        ),
+        "solver_tolerance": Derived(
+            SOLVER_TOLERANCE * min(1.0, accel),
+            f"{SOLVER_TOLERANCE:g} x min(1, (V / V_0)^2 / (L / L_0)) (accelerations scale as V^2 / L; MuJoCo's solver "
+            "stops when its scaled gradient, an acceleration, is below its tolerance: see pivoted-stick)",
+        ),
+    }
+
 
 class MarbleShot(Scenario):
     """The meter stick on ice between marbles A (one end) and C (the other): struck at offset L/6 toward C, its
@@ -93,7 +171,20 @@ class MarbleShot(Scenario):
             RodLength("stick", "stick"),
         ),
         Param(
-            "impulse", "N s", "impulse Pi of the blow, along +x (toward the marbles)", positive(1e3), Numeric("impulse")
+            "impulse",
+            "N s",
+            "impulse Pi of the blow, along +x (toward the marbles)",
+            positive(1e3),
+            Numeric("impulse"),
+            within=Bound(
+                f"Pi / M in [1e-6 L, min({DEFAULT_SPEED * math.sqrt(MAX_ACCELERATION / (2 * BLOW_ACCELERATION)):.4g} "
+                f"sqrt(L), {DEFAULT_SPEED * math.sqrt(MAX_ACCELERATION / (2 * BLOW_ANGULAR_ACCELERATION)):.4g} L)] "
+                "(m/s, L in m): the blow's accelerations, V^2 / (2e-5 L) and 2 V^2 / (2e-5 L^2) with the pulse at "
+                "2e-5 L / V, stay below 1e9 (MuJoCo: mjMAXVAL = 1e10 is a divergence) at twice the rounded step; the "
+                "reference step, 2e-6 L / V, stays below 2 s",
+                _impulses,
+                ("mass", "length"),
+            ),
         ),
         Param(
             "offset",
@@ -131,6 +222,28 @@ class MarbleShot(Scenario):
     def validate(self, params: Mapping[str, Any]) -> None:
         require_strike_on_stick(params["offset"], params["length"])
 
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        return marble_settings(params)
+
+    def apply_derived(self, spec: mujoco.MjSpec, name: str, value: float) -> None:
+        if name == "geometry_scale":
+            spec.geom("stick").size = [STICK_HALF_WIDTH * value, value / 2, STICK_HALF_WIDTH * value]
+            spec.numeric("gap").data = [MARBLE_GAP * value]
+            for marble in ("marble_a", "marble_c"):
+                spec.geom(marble).size = [MARBLE_RADIUS * value, 0.0, 0.0]
+        elif name == "marble_mass":
+            for marble in ("marble_a", "marble_c"):
+                body = spec.body(marble)
+                radius = float(spec.geom(marble).size[0])
+                body.mass = value
+                # 2/5 m r^2 (the spin never enters: frictionless contacts), at least 1e-14 (MuJoCo's floor, 1e-15)
+                body.inertia = [max(0.4 * value * radius**2, 1e-14)] * 3
+        elif name == "contact_stiffness":
+            for geom in ("stick", "marble_a", "marble_c"):
+                spec.geom(geom).solref = [-value, 0.0]
+        else:
+            super().apply_derived(spec, name, value)
+
     def check_model(self, model: mujoco.MjModel) -> None:
         solref = model.geom("stick").solref
         if solref[0] < 0:
@@ -161,9 +274,15 @@ class MarbleShot(Scenario):
         gap = float(model.numeric("gap").data[0])
         fastest = max(blow.point_velocity(s["marble_a"]), blow.point_velocity(s["marble_c"]))
         return {
+            # 1e-6 m/s at the default shot's V = 4 m/s: in units of V elsewhere (the settings follow T = L / V)
+            "_tolerance": {
+                "stick-speed-at-a": self.check("stick-speed-at-a").tolerance * abs(blow.com_velocity) / DEFAULT_SPEED
+            },
             "_theory": blow,
             "_tau": pulse.duration(model),
             "_t_first_hit": pulse.duration(model) / 2 + gap / fastest,
+            # 3 ms at the default shot, in units of T = L / V (both collisions are over within ~2 ms there)
+            "_t_min": 3e-3 * (2 * float(model.geom("stick").size[1]) / abs(blow.com_velocity)) / DEFAULT_TIME_SCALE,
             "_s_a": s["marble_a"],
             "stick-speed-at-a": float(blow.point_velocity(s["marble_a"])),
             "marble-a-speed": speeds["marble_a"],
@@ -172,7 +291,7 @@ class MarbleShot(Scenario):
 
     def duration(self, prediction: Mapping[str, Any]) -> float:
         # both collisions are over within ~2 ms at the defaults; run until the stick has turned by 0.05 rad
-        return prediction["_tau"] + max(0.05 / abs(prediction["_theory"].angular_velocity), 3e-3)
+        return prediction["_tau"] + max(0.05 / abs(prediction["_theory"].angular_velocity), prediction["_t_min"])
 
     def control(self, model: mujoco.MjModel, timestep: float, nstep: int) -> np.ndarray:
         return pulse.control(model, nstep, "strike", float(model.numeric("impulse").data[0]))
