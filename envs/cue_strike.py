@@ -40,7 +40,7 @@ import numpy as np
 
 from rigidbench import contact, frames, pulse, signals
 from rigidbench.analytic import percussion
-from rigidbench.envs.planar import BlowEnv, PlanarMotion, dot, free_body_motion
+from rigidbench.envs.planar import BlowEnv, PlanarMotion, dot, free_body_motion, similar_settings, similar_step
 from rigidbench.params import (
     ActuatorGear,
     Bound,
@@ -53,7 +53,6 @@ from rigidbench.params import (
     SphereRadius,
 )
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import round_step
 from rigidbench.simulate import Trajectory
 
 # Rolling is declared when the slip has fallen to this fraction of its initial value; under B2 that happens at
@@ -216,25 +215,15 @@ def billiard_settings(params: Mapping[str, Any]) -> dict[str, Derived]:
     """The reference settings of a ball of radius R on a cloth under g (`DEFAULT_*` at the model's defaults)."""
     radius, g = params["radius"], params["g"]
     scale = time_scale(radius, g) / DEFAULT_TIME_SCALE
-    k = MODEL_STIFFNESS / scale**2
-    dt = round_step(MODEL_TIMESTEP * scale * (1 + 1e-9))
-    why = f"T = sqrt(R / g) = {time_scale(radius, g):.6g} s, {scale:.6g} times the default ball's"
-    derived = {
-        "contact_stiffness": Derived(
-            k,
-            f"k = {MODEL_STIFFNESS:g} (T_0 / T)^2 = {k:.6g} 1/s^2, critically damped ({why}): the cloth's time "
-            "constant keeps its share of T, so MuJoCo's soft contact solves the default ball's problem in units of T",
-        ),
-        "timestep": Derived(
-            dt,
-            f"dt = {MODEL_TIMESTEP:g} s x T / T_0 rounded down to one digit ({why}; 1/sqrt(k) = "
-            f"{1 / math.sqrt(k) / dt:.3g} steps)",
-        ),
-        "pulse_duration": Derived(
-            PULSE_STEPS * dt,
-            f"tau = {PULSE_STEPS} dt ({MODEL_PULSE:g} s at the default ball): the blow keeps its share of T",
-        ),
-    }
+    why = f"T = sqrt(R / g) = {time_scale(radius, g):.6g} s, {scale:.6g} times the default ball's; critically damped"
+    derived = similar_settings(
+        scale,
+        why,
+        stiffness=MODEL_STIFFNESS,
+        timestep=MODEL_TIMESTEP,
+        pulse_steps=PULSE_STEPS,
+        pulse_default=f"{MODEL_PULSE:g} s",
+    )
     mass, mu = params["mass"], params["mu"]
     if uses_newton(mass, mu, g):
         derived["solver"] = Derived(
@@ -277,7 +266,7 @@ def skid_outside(slip: float, p: Mapping[str, Any], what: str) -> str | None:
     time alone, not `percussion.skid_to_roll`, whose skid distance overflows at mu ~ 1e-200.)"""
     mu, g = p["mu"], p["g"]
     scale = time_scale(p["radius"], g) / DEFAULT_TIME_SCALE
-    tau = PULSE_STEPS * round_step(MODEL_TIMESTEP * scale * (1 + 1e-9))
+    tau = PULSE_STEPS * similar_step(MODEL_TIMESTEP, scale)
     decel = mu * g * (1.0 + 1.0 / percussion.SOLID_SPHERE)
     t_r = abs(slip) / decel if decel > 0 else math.inf
     if SKID_PULSES * tau <= t_r <= MAX_ROLL_TIME * scale:
@@ -328,6 +317,11 @@ FRICTION = Param(
 TABLE_GRAVITY = Param("g", "m/s^2", "gravitational acceleration (along -z)", Range(1e-2, 100.0), Gravity())
 
 
+def skid_speed_param(doc: str, slip_per_speed: tuple[float, float]) -> Param:
+    """The ball's speed (m/s) `doc`, within `skid_speeds(slip_per_speed)` (the cases' smallest and largest |u0| / v)."""
+    return Param("speed", "m/s", doc, Range(1e-3, 20.0), Numeric("speed"), within=skid_speeds(slip_per_speed))
+
+
 def skid_speeds(slip_per_speed: tuple[float, float]) -> Bound:
     """The speed's dependent range for blows whose slip is `slip_per_speed` = (smallest, largest) |u0| / v of the
     cases: the skid lasts at least SKID_PULSES pulses (tau = 0.0185 T) and at most MAX_ROLL_TIME T / T_0 (B2: t_r =
@@ -367,15 +361,8 @@ class CueStrike(Scenario):
         BALL_RADIUS,
         BALL_MASS,
         FRICTION,
-        Param(
-            "speed",
-            "m/s",
-            "CoM speed v0 right after the strike (impulse M v0)",
-            Range(1e-3, 20.0),
-            Numeric("speed"),
-            # |u0| / v0 = |1 - 5h / (2R)|: 0.5 (topspin) .. 2.25 (backspin) over the skidding cases.
-            within=skid_speeds((0.5, 2.25)),
-        ),
+        # |u0| / v0 = |1 - 5h / (2R)|: 0.5 (topspin) .. 2.25 (backspin) over the skidding cases.
+        skid_speed_param("CoM speed v0 right after the strike (impulse M v0)", (0.5, 2.25)),
         Param(
             "height",
             "m",

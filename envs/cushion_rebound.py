@@ -31,7 +31,7 @@ from rigidbench.envs.cue_strike import (
     CueStrikeEnv,
     settle,
     skid_outside,
-    skid_speeds,
+    skid_speed_param,
 )
 from rigidbench.envs.cue_strike import CHECKS as CUE_CHECKS
 from rigidbench.params import Bound, Numeric, Param, Range
@@ -73,16 +73,9 @@ class CushionRebound(CueStrike):
         BALL_RADIUS,
         BALL_MASS,
         FRICTION,
-        Param(
-            "speed",
-            "m/s",
-            "speed v of the ball, rolling without slip, toward the cushion",
-            Range(1e-3, 20.0),
-            Numeric("speed"),
-            # |u'| / v = (1 + e) |5h / (2R) - 1|: from 0.5 (h = R/5 or 3R/5, e = 0) to 2 (the equator, e = 1) over
-            # the skidding cases.
-            within=skid_speeds((0.5, 2.0)),
-        ),
+        # |u'| / v = (1 + e) |5h / (2R) - 1|: from 0.5 (h = R/5 or 3R/5, e = 0) to 2 (the equator, e = 1) over the
+        # skidding cases.
+        skid_speed_param("speed v of the ball, rolling without slip, toward the cushion", (0.5, 2.0)),
         Param(
             "cushion_height",
             "m",

@@ -30,10 +30,10 @@ import numpy as np
 
 from rigidbench import contact, pulse
 from rigidbench.analytic import percussion
-from rigidbench.envs.planar import BlowEnv, body_state, free_body_motion, require_strike_on_stick
+from rigidbench.envs.planar import BlowEnv, body_state, free_body_motion, require_strike_on_stick, similar_settings
 from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
 from rigidbench.scenario import Case, Check, Derived, Scenario
-from rigidbench.settings import MAX_ACCELERATION, round_step
+from rigidbench.settings import MAX_ACCELERATION
 from rigidbench.simulate import Trajectory
 
 _C_HIT = (
@@ -124,8 +124,6 @@ def marble_settings(params: Mapping[str, Any]) -> dict[str, Derived]:
     length, mass = params["length"], params["mass"]
     speed = params["impulse"] / mass
     scale = (length / speed) / DEFAULT_TIME_SCALE
-    dt = round_step(MODEL_TIMESTEP * scale * (1 + 1e-9))
-    k = MODEL_STIFFNESS / scale**2
     accel = (speed / DEFAULT_SPEED) ** 2 / (length / DEFAULT_LENGTH)
     why = f"T = L / (Pi / M) = {length / speed:.6g} s, {scale:.6g} times the default shot's"
     return {
@@ -139,12 +137,13 @@ def marble_settings(params: Mapping[str, Any]) -> dict[str, Derived]:
             f"m = M / {1 / MARBLE_MASS:g} = {MARBLE_MASS * mass:.6g} kg (the model file's 5 g marbles on a 250 g "
             "stick: marbles much lighter than the stick, as P6 has them)",
         ),
-        "contact_stiffness": Derived(
-            k, f"k = {MODEL_STIFFNESS:g} (T_0 / T)^2 = {k:.6g} 1/s^2 ({why}): the contact keeps its share of T"
-        ),
-        "timestep": Derived(dt, f"dt = {MODEL_TIMESTEP:g} s x T / T_0 rounded down to one digit ({why})"),
-        "pulse_duration": Derived(
-            PULSE_STEPS * dt, f"tau = {PULSE_STEPS} dt (5 us at the default shot): the blow keeps its share of T"
+        **similar_settings(
+            scale,
+            why,
+            stiffness=MODEL_STIFFNESS,
+            timestep=MODEL_TIMESTEP,
+            pulse_steps=PULSE_STEPS,
+            pulse_default="5 us",
         ),
         "solver_tolerance": Derived(
             SOLVER_TOLERANCE * min(1.0, accel),

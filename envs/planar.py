@@ -267,3 +267,31 @@ def max_impulse(omega_per_impulse: float, speed_per_impulse: float, omega_tau: f
     by_turn = np.sqrt(MAX_ACCELERATION * half) / omega_per_impulse
     by_speed = np.sqrt(MAX_ACCELERATION * half / (omega_per_impulse * speed_per_impulse))
     return float(min(by_turn, by_speed))
+
+
+def similar_step(timestep: float, scale: float) -> float:
+    """A model file's reference `timestep` (s) at `scale` times its default time scale, rounded down to one digit
+    (calibrated a hair above, so the default case keeps the file's step exactly)."""
+    return round_step(timestep * scale * (1 + 1e-9))
+
+
+def similar_settings(
+    scale: float, why: str, *, stiffness: float, timestep: float, pulse_steps: int, pulse_default: str
+) -> dict[str, Derived]:
+    """Contact stiffness, timestep and pulse for a case `scale` times slower than its model file's default (`why`
+    says which time scale, with its numbers): k (T / T_0)^2, dt / T and tau / T are the default's, so MuJoCo solves the
+    default case's contact problem in units of T (issue 13: cue-strike, cushion-rebound, marble-shot)."""
+    k = stiffness / scale**2
+    dt = similar_step(timestep, scale)
+    return {
+        "contact_stiffness": Derived(
+            k,
+            f"k = {stiffness:g} (T_0 / T)^2 = {k:.6g} 1/s^2 ({why}): the contact's time constant keeps its share of T "
+            f"({1 / math.sqrt(k) / dt:.3g} steps), so MuJoCo's soft contact solves the default case's problem in "
+            "units of T",
+        ),
+        "timestep": Derived(dt, f"dt = {timestep:g} s x T / T_0 rounded down to one digit ({why})"),
+        "pulse_duration": Derived(
+            pulse_steps * dt, f"tau = {pulse_steps} dt ({pulse_default} at the default): the blow keeps its share of T"
+        ),
+    }
