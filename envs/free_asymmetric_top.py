@@ -129,6 +129,13 @@ def _where(p: Mapping[str, Any]) -> str:
     return f"I1, I2, I3 = {p['I1']:.10g}, {p['I2']:.10g}, {p['I3']:.10g} kg m^2, omega = {_vec(p['omega'])} rad/s"
 
 
+def _separatrix_scales(inertia, omega_body, top) -> dict[str, float]:
+    """How the motion amplifies a relative error of the body rates in omega-body and the flip time."""
+    sensitivity = tops.separatrix_sensitivity(tuple(inertia), omega_body)
+    k_quarter = top.reversal_time * top.rate / 2
+    return {"omega-body": 2 * RUN_PERIODS * sensitivity, "flip-time": sensitivity / k_quarter}
+
+
 def _off_separatrix(p: Mapping[str, Any]) -> str | None:
     """Domain test: the separatrix sensitivity S of the elliptic phase is at most MAX_SEPARATRIX_SENSITIVITY."""
     try:
@@ -307,6 +314,10 @@ class FreeAsymmetricTop(Scenario):
         top = tops.asymmetric_top(tuple(motion.inertia_B), motion.omega_B[0])
         return {
             "_theory": top,
+            # Float32 (`Scenario.roundoff_scale`): near the separatrix a relative error eta of the rates moves
+            # omega(t) by ~5.2 eta S over the run and each flip by ~eta S / K of its time (the float64 tolerances'
+            # reasons, `tops.separatrix_sensitivity`).
+            "_roundoff_scale": _separatrix_scales(motion.inertia_B, motion.omega_B[0], top),
             "omega-body": 0.0,
             "period": top.period,
             "flip-time": top.reversal_time,

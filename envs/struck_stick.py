@@ -182,6 +182,10 @@ class StruckStick(Scenario):
             "cusp-period": theory.cusp_period,
             "cusp-spacing": theory.cusp_spacing,
             "cusp-speed": 0.0,
+            # Float32 (`Scenario.roundoff_scale`): the spacing is a difference of positions x = V t up to two
+            # spacings from the start, advanced by V dt every step (a secular rounding, like a clock's).
+            "_roundoff_scale": {"cusp-spacing": 2.0},
+            "_roundoff_secular": ("cusp-spacing",),
         }
 
     def duration(self, prediction: Mapping[str, Any]) -> float:

@@ -35,8 +35,9 @@ from typing import Any
 import numpy as np
 
 from rigidbench import registry
+from rigidbench.engines import EngineRefused
 from rigidbench.params import Bound, Param, Range, Value
-from rigidbench.results import DIVERGED, ERROR, FAIL, PASS
+from rigidbench.results import DIVERGED, ERROR, FAIL, PASS, UNRESOLVED
 from rigidbench.runner import Job, RunResult, check_job
 from rigidbench.scenario import Case, OutsideDomain, Scenario
 from rigidbench.settings import Settings
@@ -286,6 +287,8 @@ def plan(targets: Sequence[str], *, n: int, seed: int, settings: Settings | None
                 job = check_job(Job(scenario, case.name, d.params, variant=f"census {i}"), settings)
             except OutsideDomain as exc:
                 d.status, d.reason, d.message = REFUSED, exc.domain, str(exc)
+            except EngineRefused as exc:
+                d.status, d.reason, d.message = REFUSED, "unsupported by the engine: " + _shape(str(exc)), str(exc)
             except ValueError as exc:
                 d.status, d.reason, d.message = REFUSED, "not a domain: " + _shape(str(exc)), str(exc)
             except Exception as exc:  # noqa: BLE001 - a crash is what the census counts
@@ -313,7 +316,7 @@ def settle(draws: Sequence[Draw], result: RunResult) -> None:
         if ERROR in statuses:
             d.status = CRASHED
             d.reason = next(r["message"] for r in rows if r["status"] == ERROR)
-        elif statuses <= {PASS}:
+        elif statuses <= {PASS, UNRESOLVED}:  # a check float32 cannot resolve is reported, not failed
             d.status = PASSED
         else:
             d.status = FAILED

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -22,6 +23,11 @@ import mujoco
 import numpy as np
 
 STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+
+class EngineRefused(ValueError):
+    """A model uses a feature the engine does not have (an integrator, a solver, a contact type): refused before
+    anything is simulated, naming the engine and the feature. A run reports such a case as ``unsupported``."""
 
 
 @dataclass(frozen=True)
@@ -153,11 +159,11 @@ class WarpEngine(Engine):
 
     def _check_solver(self, model: mujoco.MjModel) -> None:
         if model.opt.solver == mujoco.mjtSolver.mjSOL_PGS:
-            raise ValueError("engine warp has no PGS solver (use --option solver=Newton or CG)")
+            raise EngineRefused("engine warp has no PGS solver (use --option solver=Newton or CG)")
         if model.opt.noslip_iterations > 0:
-            raise ValueError("engine warp has no noslip solver (noslip_iterations must be 0)")
+            raise EngineRefused("engine warp has no noslip solver (noslip_iterations must be 0)")
         if model.opt.tolerance < 1e-6 and model.opt.tolerance != 0:
-            raise ValueError(
+            raise EngineRefused(
                 f"engine warp clamps the solver tolerance to >= 1e-6; the model asks {model.opt.tolerance:g} "
                 "(use --option tolerance=1e-6 to run what Warp runs)"
             )
@@ -172,17 +178,21 @@ class WarpEngine(Engine):
             with wp.ScopedDevice(self.device):
                 return mjw.put_model(model)
         except NotImplementedError as exc:
-            raise ValueError(f"engine warp cannot simulate this model: {exc}") from None
+            raise EngineRefused(f"engine warp cannot simulate this model: {exc}") from None
 
     def rollout(
         self, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None = None
     ) -> np.ndarray:
+        """One world per initial state; K steps and their recording captured once as a Warp graph and launched
+        ``nstep / K`` times (on this CPU a step launched kernel by kernel from Python costs ~11 ms, captured
+        ~0.09 ms: the launches, not the physics, were the time)."""
         import mujoco_warp as mjw
         import warp as wp
 
         t, q, v = _layout(model)
         nbatch = len(states0)
-        out = np.repeat(states0[:, None, :], nstep, axis=1)
+        from rigidbench.warp_kernels import advance, record, set_ctrl
+
         with wp.ScopedDevice(self.device):
             m = self._model_on_device(model)
             data = mujoco.MjData(model)
@@ -191,14 +201,82 @@ class WarpEngine(Engine):
             d.qpos.assign(states0[:, q].astype(np.float32))
             d.qvel.assign(states0[:, v].astype(np.float32))
             d.time.assign(states0[:, 0].astype(np.float32))
-            for i in range(nstep):
-                if control is not None:
-                    d.ctrl.assign(np.ascontiguousarray(control[:, i]).astype(np.float32))
+            qs = wp.zeros((nstep, nbatch, model.nq), dtype=wp.float32)
+            vs = wp.zeros((nstep, nbatch, model.nv), dtype=wp.float32)
+            ctrl = None
+            if control is not None:
+                ctrl = wp.array(np.ascontiguousarray(np.swapaxes(control, 0, 1)), dtype=wp.float32)
+            index = wp.zeros(1, dtype=wp.int32)
+
+            def one_step() -> None:
+                if ctrl is not None:
+                    wp.launch(set_ctrl, dim=(nbatch, model.nu), inputs=[ctrl, index, d.ctrl])
                 mjw.step(m, d)
-                out[:, i, t] = d.time.numpy().astype(np.float64)[:, None]
-                out[:, i, q] = d.qpos.numpy()
-                out[:, i, v] = d.qvel.numpy()
+                wp.launch(record, dim=nbatch, inputs=[d.qpos, d.qvel, index, qs, vs])
+                wp.launch(advance, dim=1, inputs=[index])  # after every world has recorded step `index`
+
+            k = _steps_per_graph(nstep)
+            one_step()  # compile and load every kernel before capturing
+            index.zero_()
+            d.qpos.assign(states0[:, q].astype(np.float32))
+            d.qvel.assign(states0[:, v].astype(np.float32))
+            d.time.assign(states0[:, 0].astype(np.float32))
+            with wp.ScopedCapture() as capture:
+                for _ in range(k):
+                    one_step()
+            for _ in range(nstep // k):
+                wp.capture_launch(capture.graph)
+            for _ in range(nstep % k):
+                one_step()
+            wp.synchronize()
+            out = np.repeat(states0[:, None, :], nstep, axis=1)
+            out[:, :, q] = np.swapaxes(qs.numpy(), 0, 1)
+            out[:, :, v] = np.swapaxes(vs.numpy(), 0, 1)
+        out[:, :, t] = clock(states0[:, 0], model.opt.timestep, nstep)[..., None]
         return out
+
+
+def _steps_per_graph(nstep: int) -> int:
+    """Steps captured in one Warp graph: enough that launching it costs little per step, few enough that the
+    remainder (stepped one by one) stays cheap."""
+    return max(1, min(nstep, 32))
+
+
+# The float32 round-off floor's factor: a step rounds each of the state's numbers to within eps/2 of its size, a few
+# dozen operations per RK4 stage each add as much, and the roundings add up as a random walk over the run (measured
+# on every check both float32 engines run: docs/engines.md); C = 10 keeps the floor above what was measured without
+# making it a blanket.
+ROUNDOFF_FACTOR = 10.0
+
+
+def roundoff_floor(precision: str, nstep: int, scale: float, *, secular: bool = False) -> tuple[float, str]:
+    """The error float `precision` alone leaves in a quantity of size `scale` after `nstep` steps, and its rule.
+
+    Random (the default): ``C eps sqrt(N + 1) scale``, the initial state's rounding and a random walk of each step's
+    (`ROUNDOFF_FACTOR`). Secular, for a coordinate that a steady motion advances by a near-constant increment every
+    step (a position in uniform motion, like the clock): each addition is rounded to within half an ulp of the sum,
+    the same way every step, so the error grows like the step count, at most ``(eps / 2) N scale``. 0 on float64,
+    whose floor is below every tolerance.
+    """
+    if precision == "float64":
+        return 0.0, ""
+    eps = float(np.finfo(np.dtype(precision)).eps)
+    if secular:
+        floor = 0.5 * eps * nstep * scale
+        return floor, f"(eps / 2) N x scale, eps = {eps:.3g}, N = {nstep} steps (secular), scale {scale:.3g}"
+    floor = ROUNDOFF_FACTOR * eps * math.sqrt(nstep + 1) * scale
+    return floor, f"{ROUNDOFF_FACTOR:g} eps sqrt(N + 1) x scale, eps = {eps:.3g}, N = {nstep} steps, scale {scale:.3g}"
+
+
+def clock(t0: np.ndarray, timestep: float, nstep: int) -> np.ndarray:
+    """The time after each step, t0 + (i + 1) dt, in float64, shape (nbatch, nstep).
+
+    A float32 engine's own clock accumulates ``t += dt`` in float32: at t = 43 s, dt = 2 ms is rounded to a multiple
+    of the clock's ulp (3.8e-6 s) every step, a bias of 5e-4 of the step, which alone put the pendulum's measured
+    period 1.05e-4 off on Warp and MJX float32. Nothing in rigidbench's models reads the time (controls are given
+    per step), so the step count is the clock.
+    """
+    return np.asarray(t0, dtype=np.float64)[:, None] + timestep * np.arange(1, nstep + 1)
 
 
 @dataclass(frozen=True)
@@ -230,7 +308,7 @@ class MjxEngine(Engine):
         try:
             return mjx.put_model(model, device=jax.devices(self.device)[0])
         except NotImplementedError as exc:
-            raise ValueError(f"engine mjx cannot simulate this model: {exc}") from None
+            raise EngineRefused(f"engine mjx cannot simulate this model: {_feature(exc)}") from None
 
     def rollout(
         self, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None = None
@@ -244,7 +322,11 @@ class MjxEngine(Engine):
         m = self._model_on_device(model)
         data = mujoco.MjData(model)
         mujoco.mj_setState(model, data, states0[0], STATE)
+        # put_data keeps MuJoCo's int32 contact indices; under jax_enable_x64 a step returns them as int64, which
+        # `scan` refuses as a carry: give every array of the start the dtype a step gives it.
         d0 = mjx.put_data(model, data)
+        shapes = jax.eval_shape(lambda d: mjx.step(m, d), d0)
+        d0 = jax.tree_util.tree_map(lambda x, like: jp.asarray(x, like.dtype), d0, shapes)
         ctrl = jp.zeros((len(states0), nstep, model.nu), dtype) if control is None else jp.asarray(control, dtype)
 
         def one(time, qpos, qvel, controls):
@@ -252,19 +334,29 @@ class MjxEngine(Engine):
 
             def body(d, c):
                 d = mjx.step(m, d.replace(ctrl=c))
-                return d, (d.time, d.qpos, d.qvel)
+                return d, (d.qpos, d.qvel)
 
             return jax.lax.scan(body, d, controls)[1]
 
         run = jax.jit(jax.vmap(one))
-        times, qpos, qvel = run(
+        qpos, qvel = run(
             jp.asarray(states0[:, 0], dtype), jp.asarray(states0[:, q], dtype), jp.asarray(states0[:, v], dtype), ctrl
         )
         out = np.repeat(states0[:, None, :], nstep, axis=1)
-        out[:, :, t] = np.asarray(times, dtype=np.float64)[..., None]
+        out[:, :, t] = clock(states0[:, 0], model.opt.timestep, nstep)[..., None]  # not `times`: see `clock`
         out[:, :, q] = np.asarray(qpos, dtype=np.float64)
         out[:, :, v] = np.asarray(qvel, dtype=np.float64)
         return out
+
+
+def _feature(exc: NotImplementedError) -> str:
+    """MJX's refusal names the feature as an enum (``mjtSolver.mjSOL_PGS``); say it in words too."""
+    text = str(exc)
+    words = {"mjSOL_PGS": "the PGS solver", "mjINT_IMPLICIT": "the implicit integrator"}
+    for key, word in words.items():
+        if key in text:
+            return f"{word} is not implemented ({text})"
+    return text
 
 
 def batched_engine(name: str, *, device: str | None, precision: str | None) -> Engine:

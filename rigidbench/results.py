@@ -21,6 +21,11 @@ import mujoco
 from rigidbench.scenario import CaseRun
 
 PASS, FAIL, DIVERGED, ERROR = "pass", "fail", "diverged", "error"
+# A check the engine's float precision cannot resolve (`rigidbench.scenario.UNRESOLVED_FRACTION`): reported, not
+# scored.
+UNRESOLVED = "unresolved"
+# A case the engine in effect cannot simulate (`rigidbench.engines.EngineRefused`): one row, nothing scored.
+UNSUPPORTED = "unsupported"
 
 
 def rows_of(run: CaseRun) -> list[dict[str, Any]]:
@@ -66,8 +71,8 @@ def rows_of(run: CaseRun) -> list[dict[str, Any]]:
             "tolerance_kind": o.check.kind,
             "tolerance_reason": o.check.reason,
             "theory": o.check.theory,
-            "status": PASS if o.passed else FAIL,
-            "passed": o.passed,
+            "status": UNRESOLVED if o.unresolved else PASS if o.passed else FAIL,
+            "passed": None if o.unresolved else o.passed,
             "diverged_at": None,
         }
         for o in run.outcomes
@@ -183,6 +188,10 @@ def junit_text(rows: Sequence[dict[str, Any]], completion: Completion | None = N
                 ET.SubElement(case, "error", message=f"simulation diverged at t = {row['diverged_at']:.6g} s")
             elif row["status"] == ERROR:
                 ET.SubElement(case, "error", message=row["message"])
+            elif row["status"] == UNSUPPORTED:
+                ET.SubElement(case, "skipped", message=row["message"])
+            elif row["status"] == UNRESOLVED:
+                ET.SubElement(case, "skipped", message=row["tolerance_reason"])
             ET.SubElement(case, "system-out").text = json.dumps(_jsonable({"params": row["params"]}))
     if completion is not None and not completion.complete:
         suite = ET.SubElement(suites, "testsuite", name="rigidbench", tests="1", failures="0", errors="1")
@@ -216,6 +225,8 @@ def table(rows: Iterable[dict[str, Any]]) -> str:
             verdict = f"DIVERGED at t={r['diverged_at']:.4g} s"
         elif r["status"] == ERROR:
             verdict = f"ERROR {r['message']}"
+        elif r["status"] == UNSUPPORTED:
+            verdict = f"UNSUPPORTED {r['message'][r['message'].find('engine ') :]}"
         else:
             verdict = r["status"].upper()
         lines.append(
@@ -238,6 +249,11 @@ def table(rows: Iterable[dict[str, Any]]) -> str:
 
 
 def summary(rows: Sequence[dict[str, Any]]) -> str:
-    n = {s: sum(r["status"] == s for r in rows) for s in (PASS, FAIL, DIVERGED, ERROR)}
+    n = {s: sum(r["status"] == s for r in rows) for s in (PASS, FAIL, DIVERGED, ERROR, UNSUPPORTED, UNRESOLVED)}
     errors = f", {n[ERROR]} errors" if n[ERROR] else ""
-    return f"{n[PASS]} passed, {n[FAIL]} failed, {n[DIVERGED]} diverged{errors} ({len(rows)} checks)"
+    errors += f", {n[UNRESOLVED]} unresolved at the engine's precision" if n[UNRESOLVED] else ""
+    unsupported = f", {n[UNSUPPORTED]} case(s) unsupported by the engine" if n[UNSUPPORTED] else ""
+    return (
+        f"{n[PASS]} passed, {n[FAIL]} failed, {n[DIVERGED]} diverged{errors}{unsupported} "
+        f"({len(rows) - n[UNSUPPORTED]} checks)"
+    )

@@ -24,7 +24,7 @@ import mujoco
 from rigidbench import registry
 from rigidbench.interrupt import Interrupted
 from rigidbench.params import Value
-from rigidbench.results import ERROR, rows_of
+from rigidbench.results import ERROR, UNSUPPORTED, rows_of
 from rigidbench.scenario import Scenario
 from rigidbench.settings import Settings, profile
 
@@ -44,6 +44,9 @@ class Job:
     # What planning found (`check_job`): the settings the job runs with, read back from its compiled model, and
     # the number of checks of its case; a resumed journal's rows must match them (`journal.verify`).
     expected: tuple[dict[str, Any], int] | None = field(default=None, compare=False, repr=False)
+    # Why the engine in effect cannot run the job (`rigidbench.engines.EngineRefused`): it yields one row of status
+    # ``unsupported`` without simulating.
+    unsupported: str | None = field(default=None, compare=False, repr=False)
 
     @property
     def name(self) -> str:
@@ -124,12 +127,19 @@ def plan(
         For an unknown scenario, case or parameter, an invalid value, a set outside the theory's domain, or a
         run beyond the step or memory limits (naming it).
     """
+    from rigidbench.engines import EngineRefused
+
     jobs = []
     for target in targets or list(registry.scenarios()):
         scenario, cases = registry.parse_target(target)
         parsed = parse_overrides(scenario, overrides or {})
         for case in cases:
-            jobs.append(check_job(Job(scenario, case, parsed), settings))
+            try:
+                jobs.append(check_job(Job(scenario, case, parsed), settings))
+            except EngineRefused as exc:
+                jobs.append(Job(scenario, case, parsed, unsupported=str(exc)))
+    if jobs and all(job.unsupported for job in jobs):
+        raise ValueError(jobs[0].unsupported + (f" (and the other {len(jobs) - 1} cases)" if len(jobs) > 1 else ""))
     return jobs
 
 
@@ -163,16 +173,41 @@ def settings_for(
 def run_job(job: Job, settings: Settings | None) -> list[dict[str, Any]]:
     """The result rows of one job. An exception other than an interrupt becomes one row of status ``"error"``
     (its type, message and where it was raised), so one broken case never loses the others' rows."""
+    if job.unsupported:
+        return [unsupported_row(job, settings)]
     try:
         return rows_of(job.scenario.run(job.case, job.overrides, settings, perturb=job.perturb))
     except Exception as exc:  # noqa: BLE001 - recorded as a row, never swallowed
         return [error_row(job, settings, exc)]
 
 
+def expected_rows(jobs: Sequence[Job], settings: Settings | None) -> dict[str, tuple[dict[str, Any], int]]:
+    """What a resumed journal must hold for each planned job (`rigidbench.journal.verify`): the settings it runs
+    with and its number of rows (one for a job the engine does not support)."""
+    out = {job.key: job.expected for job in jobs if job.expected}
+    out.update({job.key: (unsupported_row(job, settings)["settings"], 1) for job in jobs if job.unsupported})
+    return out
+
+
+def unsupported_row(job: Job, settings: Settings | None) -> dict[str, Any]:
+    """The row of a job the engine in effect refused while planning (`Job.unsupported`): nothing simulated."""
+    engine = settings.engine_object() if settings is not None else None
+    row = {**_no_result(job, settings), "check": "unsupported", "status": UNSUPPORTED, "message": job.unsupported}
+    row["settings"].update(engine.record() if engine is not None else {})
+    return row
+
+
 def error_row(job: Job, settings: Settings | None, exc: BaseException) -> dict[str, Any]:
     """The row of a job that raised `exc` instead of producing results."""
     frames = traceback.extract_tb(exc.__traceback__)
     where = f"{os.path.basename(frames[-1].filename)}:{frames[-1].lineno}" if frames else ""
+    return {
+        **_no_result(job, settings),
+        "message": f"{type(exc).__name__}: {exc}" + (f" (at {where})" if where else ""),
+    }
+
+
+def _no_result(job: Job, settings: Settings | None) -> dict[str, Any]:
     return {
         "scenario": job.scenario.slug,
         "case": job.case,
@@ -188,7 +223,6 @@ def error_row(job: Job, settings: Settings | None, exc: BaseException) -> dict[s
         "status": ERROR,
         "passed": None,
         "diverged_at": None,
-        "message": f"{type(exc).__name__}: {exc}" + (f" (at {where})" if where else ""),
         "settings": {**vars(settings or Settings()), "mujoco": mujoco.__version__},
         "params": dict(job.overrides),
     }

@@ -167,6 +167,12 @@ class Check:
         return diff / abs(expected) if expected != 0 else math.inf
 
 
+# A check whose float32 round-off floor reaches this fraction of the quantity itself says nothing about the physics
+# at that precision (`Scenario._roundoff_check`): it is reported as unresolved instead of passing on a tolerance
+# that could not fail.
+UNRESOLVED_FRACTION = 0.1
+
+
 @dataclass(frozen=True)
 class Outcome:
     """One scored check: a result row without the run's context."""
@@ -174,6 +180,9 @@ class Outcome:
     check: Check
     measured: float
     expected: float
+    # The engine's float precision alone could move the quantity by `UNRESOLVED_FRACTION` of itself or more
+    # (`Scenario._roundoff_check`): reported, never scored.
+    unresolved: bool = False
 
     @property
     def error(self) -> float:
@@ -316,6 +325,49 @@ class Scenario:
         tolerance = prediction.get("_tolerance", {}).get(name)
         return check if tolerance is None else dataclasses.replace(check, tolerance=float(tolerance))
 
+    def roundoff_scale(self, name: str, prediction: Mapping[str, Any]) -> float:
+        """The size of check `name`'s quantity, in its unit, that a float32 engine's round-off is relative to
+        (`rigidbench.engines.roundoff_floor`): 1 for a relative error or a dimensionless ratio, else the expected
+        value's size (at least 1 rad for an angle).
+
+        A scenario gives the scale as ``prediction["_roundoff_scale"][name]`` where the quantity is expected to be 0
+        in a unit (e.g. the ball's speed for a slip that should vanish), where its motion amplifies round-off (a
+        spin near the separatrix), or where its measurement subtracts large numbers (a spacing between positions far
+        from the origin), in units of the quantity. A quantity read from a coordinate that a steady motion advances
+        every step is named in ``prediction["_roundoff_secular"]`` (its floor grows like the step count).
+        """
+        check = self.check(name)
+        given = prediction.get("_roundoff_scale", {}).get(name)
+        if given is not None:
+            return float(given)
+        if check.kind == "rel" or check.unit == "1":
+            return 1.0
+        size = abs(float(prediction[name]))
+        return max(size, 1.0) if check.unit == "rad" else size
+
+    def _roundoff_check(
+        self, check: Check, prediction: Mapping[str, Any], precision: str, nstep: int
+    ) -> tuple[Check, bool]:
+        """The check as scored on an engine of `precision`, and whether that precision resolves it at all.
+
+        On float64 the check is unchanged. On float32 its tolerance gains the round-off floor of float32 over the
+        run (`rigidbench.engines.roundoff_floor`), stated in its reason; where that floor reaches
+        `UNRESOLVED_FRACTION` of the quantity itself (1 for a relative or dimensionless check, else the expected
+        value's size), float32 alone could move it that much: the check is reported as unresolved, not scored.
+        """
+        from rigidbench.engines import roundoff_floor
+
+        secular = check.name in prediction.get("_roundoff_secular", ())
+        floor, rule = roundoff_floor(precision, nstep, self.roundoff_scale(check.name, prediction), secular=secular)
+        if floor == 0:
+            return check, False
+        size = 1.0 if check.kind == "rel" or check.unit == "1" else abs(float(prediction[check.name]))
+        unresolved = size > 0 and floor >= UNRESOLVED_FRACTION * size
+        reason = f"{check.reason}; + {precision} round-off {rule} = {floor:.3g} (float64 tolerance {check.tolerance:g})"
+        if unresolved:
+            reason += f": at least {UNRESOLVED_FRACTION:g} of the quantity, so {precision} cannot resolve it"
+        return dataclasses.replace(check, tolerance=check.tolerance + floor, reason=reason), unresolved
+
     # ---- the core ---------------------------------------------------------------------------------------
 
     @property
@@ -448,7 +500,7 @@ class Scenario:
             try:
                 engine.check(model)  # refuse what the engine lacks, before anything is simulated
             except ValueError as exc:
-                raise ValueError(f"scenario '{self.slug}': {exc}") from None
+                raise type(exc)(f"scenario '{self.slug}': {exc}") from None
         return model
 
     def settings_record(self, model: mujoco.MjModel, settings: Settings | None) -> dict:
@@ -573,10 +625,12 @@ class Scenario:
         outcomes = []
         if traj.diverged_at is None:
             measured = self.measure(model, traj, prediction)
-            outcomes = [
-                Outcome(self._scaled_check(name, prediction), float(measured[name]), float(prediction[name]))
-                for name in prep.case.checks
-            ]
+            precision = engine.precision if engine is not None else "float64"
+            for name in prep.case.checks:
+                check, unresolved = self._roundoff_check(
+                    self._scaled_check(name, prediction), prediction, precision, len(traj.time) - 1
+                )
+                outcomes.append(Outcome(check, float(measured[name]), float(prediction[name]), unresolved))
         return CaseRun(
             scenario=self.slug,
             case=prep.case.name,

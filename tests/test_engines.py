@@ -1,0 +1,174 @@
+"""Engines (issue 15): the seam where a case is simulated, what an engine lacks refused as ``unsupported``, the
+float32 round-off floor added to a check's tolerance (and only on float32), the float64 clock.
+
+The fakes below run on C MuJoCo, so every path is tested here without Warp or MJX; the tests at the end run the real
+engines where they are installed (CI's engine environment, `.ci/run`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+import pytest
+
+from rigidbench import engines, results, runner
+from rigidbench.cli import main
+from rigidbench.engines import CEngine, EngineRefused, clock, roundoff_floor
+from rigidbench.settings import Settings
+
+
+@dataclass(frozen=True)
+class Float32Engine(CEngine):
+    """C MuJoCo whose every step's state is rounded to float32 (as a float32 engine hands its state back)."""
+
+    name: str = "fake32"
+    precision: str = "float32"
+
+    def rollout(self, model, states0, nstep, control=None):
+        out = np.empty((len(states0), nstep, states0.shape[1]))
+        data = mujoco.MjData(model)
+        for b, s0 in enumerate(states0):
+            mujoco.mj_setState(model, data, s0.astype(np.float32).astype(np.float64), engines.STATE)
+            for i in range(nstep):
+                if control is not None:
+                    data.ctrl[:] = control[b, i]
+                mujoco.mj_step(model, data)
+                data.qpos[:] = data.qpos.astype(np.float32)
+                data.qvel[:] = data.qvel.astype(np.float32)
+                mujoco.mj_getState(model, data, out[b, i], engines.STATE)
+        out[:, :, 0] = clock(states0[:, 0], model.opt.timestep, nstep)
+        return out
+
+
+@dataclass(frozen=True)
+class NoPgsEngine(CEngine):
+    """C MuJoCo that refuses the PGS solver, as Warp and MJX do."""
+
+    name: str = "nopgs"
+
+    def check(self, model):
+        if model.opt.solver == mujoco.mjtSolver.mjSOL_PGS:
+            raise EngineRefused("engine nopgs has no PGS solver")
+
+
+@pytest.fixture
+def fake_engine(monkeypatch):
+    """The fakes above stand in for the engines the CLI knows (``--engine warp`` is `NoPgsEngine`, ``mjx``
+    `Float32Engine`), so these tests run where neither is installed."""
+    fakes = {"mjx": Float32Engine(), "warp": NoPgsEngine()}
+    real = engines.engine_for
+    monkeypatch.setattr(engines, "engine_for", lambda name, **kw: fakes.get(name) or real(name, **kw))
+    return fakes
+
+
+def test_roundoff_floor_is_zero_on_float64_and_grows_like_sqrt_steps():
+    assert roundoff_floor("float64", 10**6, 1.0)[0] == 0.0
+    f100, rule = roundoff_floor("float32", 99, 2.0)
+    f10k, _ = roundoff_floor("float32", 9999, 2.0)
+    eps = float(np.finfo(np.float32).eps)
+    assert f100 == pytest.approx(engines.ROUNDOFF_FACTOR * eps * 10 * 2.0)
+    assert f10k / f100 == pytest.approx(10.0)
+    assert "sqrt(N + 1)" in rule and "N = 99" in rule
+
+
+def test_clock_counts_steps_in_float64():
+    t = clock(np.array([0.0, 1.0]), 0.002, 21659)
+    assert t.shape == (2, 21659)
+    assert t[0, -1] == pytest.approx(21659 * 0.002, abs=1e-12)
+    # What a float32 clock `t += dt` reaches instead: the bias the float64 clock removes.
+    t32 = np.float32(0.0)
+    for _ in range(21659):
+        t32 = np.float32(t32 + np.float32(0.002))
+    assert abs(float(t32) - t[0, -1]) > 2.1e-4  # 1e-4 of the 2.14 s period the pendulum measures
+
+
+def test_float32_engine_adds_the_floor_and_says_so(fake_engine):
+    settings = Settings(engine="mjx")
+    rows32 = runner.run_job(runner.plan(["pendulum:one-radian"], None, settings)[0], settings)
+    rows64 = runner.run_job(runner.plan(["pendulum:one-radian"], None, None)[0], None)
+    for r32, r64 in zip(rows32, rows64, strict=True):
+        assert r32["settings"]["precision"] == "float32" and r64["settings"]["precision"] == "float64"
+        floor = engines.ROUNDOFF_FACTOR * float(np.finfo(np.float32).eps) * math.sqrt(r32["nstep"] + 1)
+        assert r32["tolerance"] == pytest.approx(r64["tolerance"] + floor)  # scale 1: rel checks and ratios
+        assert "float32 round-off" in r32["tolerance_reason"]
+        assert f"float64 tolerance {r64['tolerance']:g}" in r32["tolerance_reason"]
+        assert "float32" not in r64["tolerance_reason"]
+        assert r32["status"] == results.PASS, r32
+        # The rounding is real (the measurement moved), and within the floor.
+        assert r32["measured"] != r64["measured"]
+        assert abs(r32["measured"] - r64["measured"]) < floor * max(abs(r64["expected"]), 1.0)
+
+
+def test_unsupported_case_is_a_row_not_a_failure(fake_engine, tmp_path, capsys):
+    out = tmp_path / "r.json"
+    xml = tmp_path / "r.xml"
+    status = main(
+        [
+            "run",
+            "cue-strike:centre",
+            "pendulum:one-radian",
+            "--engine",
+            "warp",
+            "--quiet",
+            "--json",
+            str(out),
+            "--junit",
+            str(xml),
+        ]
+    )
+    assert status == 0
+    rows = json.loads(out.read_text())["results"]
+    unsupported = [r for r in rows if r["status"] == results.UNSUPPORTED]
+    assert [(r["scenario"], r["case"]) for r in unsupported] == [("cue-strike", "centre")]
+    assert "engine nopgs has no PGS solver" in unsupported[0]["message"]
+    assert unsupported[0]["settings"]["engine"] == "nopgs"
+    assert all(r["status"] == results.PASS for r in rows if r["scenario"] == "pendulum")
+    assert "<skipped" in xml.read_text()
+    assert "1 case(s) unsupported by the engine" in results.summary(rows)
+
+
+def test_every_case_unsupported_is_a_usage_error(fake_engine, capsys):
+    assert main(["run", "cue-strike", "--engine", "warp"]) == 2
+    err = capsys.readouterr().err
+    assert "engine nopgs has no PGS solver" in err and "(and the other 3 cases)" in err
+
+
+def test_resume_accepts_the_journaled_unsupported_rows(fake_engine, tmp_path):
+    journal = tmp_path / "j.jsonl"
+    args = ["run", "cue-strike:centre", "pendulum:one-radian", "--engine", "warp", "--quiet"]
+    assert main([*args, "--jsonl", str(journal)]) == 0
+    assert main(["run", "--resume", str(journal), "--quiet", "--json", str(tmp_path / "again.json")]) == 0
+    rows = json.loads((tmp_path / "again.json").read_text())["results"]
+    assert [r["status"] for r in rows].count(results.UNSUPPORTED) == 1
+
+
+def test_uninstalled_engine_names_its_extra():
+    import importlib.util
+
+    if importlib.util.find_spec("mujoco_warp") is not None:
+        pytest.skip("mujoco_warp is installed here")
+    with pytest.raises(ValueError, match=r"rigidbench\[warp\]"):
+        engines.engine_for("warp")
+
+
+# ---- the real engines (installed in CI's engine environment) -------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["warp", "mjx"])
+def test_real_engine_runs_the_pendulum_within_its_floor(name):
+    pytest.importorskip({"warp": "mujoco_warp", "mjx": "mujoco.mjx"}[name])
+    settings = Settings(engine=name)
+    rows = runner.run_job(runner.plan(["pendulum:one-radian"], None, settings)[0], settings)
+    assert {r["status"] for r in rows} == {results.PASS}, rows
+    assert rows[0]["settings"]["precision"] == "float32" and rows[0]["settings"]["engine"] == name
+    assert all("float32 round-off" in r["tolerance_reason"] for r in rows)
+
+
+def test_warp_refuses_pgs_before_simulating():
+    pytest.importorskip("mujoco_warp")
+    with pytest.raises(EngineRefused, match="engine warp has no PGS solver"):
+        runner.check_job(runner.Job(runner.registry.scenario("cue-strike"), "centre"), Settings(engine="warp"))
