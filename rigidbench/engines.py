@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import math
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -173,9 +174,9 @@ class WarpEngine(Engine):
         import warp as wp
 
         wp.config.quiet = True
-        wp.init()
         try:
-            with wp.ScopedDevice(self.device):
+            with _WARP_LOCK, wp.ScopedDevice(self.device):
+                wp.init()
                 return mjw.put_model(model)
         except NotImplementedError as exc:
             raise EngineRefused(f"engine warp cannot simulate this model: {exc}") from None
@@ -186,6 +187,12 @@ class WarpEngine(Engine):
         """One world per initial state; K steps and their recording captured once as a Warp graph and launched
         ``nstep / K`` times (on this CPU a step launched kernel by kernel from Python costs ~11 ms, captured
         ~0.09 ms: the launches, not the physics, were the time)."""
+        with _WARP_LOCK:  # one rollout at a time: see `_WARP_LOCK`
+            return self._rollout(model, states0, nstep, control)
+
+    def _rollout(
+        self, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None
+    ) -> np.ndarray:
         import mujoco_warp as mjw
         import warp as wp
 
@@ -221,7 +228,7 @@ class WarpEngine(Engine):
             d.qpos.assign(states0[:, q].astype(np.float32))
             d.qvel.assign(states0[:, v].astype(np.float32))
             d.time.assign(states0[:, 0].astype(np.float32))
-            with wp.ScopedCapture() as capture:
+            with wp.ScopedCapture(force_module_load=False) as capture:  # the warm-up step loaded what it needs
                 for _ in range(k):
                     one_step()
             for _ in range(nstep // k):
@@ -234,6 +241,12 @@ class WarpEngine(Engine):
             out[:, :, v] = np.swapaxes(vs.numpy(), 0, 1)
         out[:, :, t] = clock(states0[:, 0], model.opt.timestep, nstep)[..., None]
         return out
+
+
+# Warp compiles and loads kernels on first use and captures graphs per thread; two cases doing that at once (the
+# runner's default two threads, on a fresh kernel cache) crashed the process (SIGSEGV / SIGILL in Warp's CPU graph
+# replay). Warp steps all worlds of a batch in one launch anyway, so its rollouts run one at a time.
+_WARP_LOCK = threading.RLock()
 
 
 def _steps_per_graph(nstep: int) -> int:

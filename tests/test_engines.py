@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from rigidbench import engines, results, runner
+from rigidbench import engines, registry, results, runner
 from rigidbench.cli import main
 from rigidbench.engines import CEngine, EngineRefused, clock, roundoff_floor
 from rigidbench.settings import Settings
@@ -171,4 +171,4 @@ def test_real_engine_runs_the_pendulum_within_its_floor(name):
 def test_warp_refuses_pgs_before_simulating():
     pytest.importorskip("mujoco_warp")
     with pytest.raises(EngineRefused, match="engine warp has no PGS solver"):
-        runner.check_job(runner.Job(runner.registry.scenario("cue-strike"), "centre"), Settings(engine="warp"))
+        runner.check_job(runner.Job(registry.get("cue-strike"), "centre"), Settings(engine="warp"))
