@@ -133,7 +133,12 @@ def _separatrix_scales(inertia, omega_body, top) -> dict[str, float]:
     """How the motion amplifies a relative error of the body rates in omega-body and the flip time."""
     sensitivity = tops.separatrix_sensitivity(tuple(inertia), omega_body)
     k_quarter = top.reversal_time * top.rate / 2
-    return {"omega-body": 2 * RUN_PERIODS * sensitivity, "flip-time": sensitivity / k_quarter}
+    # K moves by eta S / 2, so the period 4 K / s by eta S / (2 K) of itself.
+    return {
+        "omega-body": 2 * RUN_PERIODS * sensitivity,
+        "flip-time": sensitivity / k_quarter,
+        "period": sensitivity / (2 * k_quarter),
+    }
 
 
 def _off_separatrix(p: Mapping[str, Any]) -> str | None:
