@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import functools
 import math
 import threading
 from collections.abc import Iterator
@@ -205,9 +206,13 @@ class WarpEngine(Engine):
             data = mujoco.MjData(model)
             mujoco.mj_setState(model, data, states0[0], STATE)
             d = mjw.put_data(model, data, nworld=nbatch)
-            d.qpos.assign(states0[:, q].astype(np.float32))
-            d.qvel.assign(states0[:, v].astype(np.float32))
-            d.time.assign(states0[:, 0].astype(np.float32))
+
+            def start() -> None:
+                d.qpos.assign(states0[:, q].astype(np.float32))
+                d.qvel.assign(states0[:, v].astype(np.float32))
+                d.time.assign(states0[:, 0].astype(np.float32))
+
+            start()
             qs = wp.zeros((nstep, nbatch, model.nq), dtype=wp.float32)
             vs = wp.zeros((nstep, nbatch, model.nv), dtype=wp.float32)
             ctrl = None
@@ -225,9 +230,7 @@ class WarpEngine(Engine):
             k = _steps_per_graph(nstep)
             one_step()  # compile and load every kernel before capturing
             index.zero_()
-            d.qpos.assign(states0[:, q].astype(np.float32))
-            d.qvel.assign(states0[:, v].astype(np.float32))
-            d.time.assign(states0[:, 0].astype(np.float32))
+            start()  # the warm-up step moved the worlds: back to the start
             with wp.ScopedCapture(force_module_load=False) as capture:  # the warm-up step loaded what it needs
                 for _ in range(k):
                     one_step()
@@ -295,7 +298,7 @@ def clock(t0: np.ndarray, timestep: float, nstep: int) -> np.ndarray:
 @dataclass(frozen=True)
 class MjxEngine(Engine):
     """MJX (`mujoco.mjx`, JAX), float32 by default or float64 (``jax_enable_x64``), `jax.vmap` over the batch and
-    `jax.lax.scan` over the steps, compiled once per model structure, batch size and run length."""
+    `jax.lax.scan` over the steps (`_mjx_program`), compiled once per model structure, batch size and run length."""
 
     name: str = "mjx"
     precision: str = "float32"
@@ -341,20 +344,8 @@ class MjxEngine(Engine):
         shapes = jax.eval_shape(lambda d: mjx.step(m, d), d0)
         d0 = jax.tree_util.tree_map(lambda x, like: jp.asarray(x, like.dtype), d0, shapes)
         ctrl = jp.zeros((len(states0), nstep, model.nu), dtype) if control is None else jp.asarray(control, dtype)
-
-        def one(time, qpos, qvel, controls):
-            d = d0.replace(time=time, qpos=qpos, qvel=qvel)
-
-            def body(d, c):
-                d = mjx.step(m, d.replace(ctrl=c))
-                return d, (d.qpos, d.qvel)
-
-            return jax.lax.scan(body, d, controls)[1]
-
-        run = jax.jit(jax.vmap(one))
-        qpos, qvel = run(
-            jp.asarray(states0[:, 0], dtype), jp.asarray(states0[:, q], dtype), jp.asarray(states0[:, v], dtype), ctrl
-        )
+        start = [jp.asarray(states0[:, column], dtype) for column in (0, q, v)]  # time, qpos, qvel
+        qpos, qvel = _mjx_program()(m, d0, *start, ctrl)
         out = np.repeat(states0[:, None, :], nstep, axis=1)
         out[:, :, t] = clock(states0[:, 0], model.opt.timestep, nstep)[..., None]  # not `times`: see `clock`
         out[:, :, q] = np.asarray(qpos, dtype=np.float64)
@@ -370,6 +361,27 @@ def _feature(exc: NotImplementedError) -> str:
         if key in text:
             return f"{word} is not implemented ({text})"
     return text
+
+
+@functools.cache
+def _mjx_program():
+    """The batched MJX rollout, jitted once: `jax.vmap` over the worlds of `jax.lax.scan` over the steps. The model
+    and the start are arguments, not closed over, so JAX reuses the compiled program for every call of the same
+    shapes (each chunk of a Monte Carlo batch, a perturbed copy in `power`) instead of tracing it again."""
+    import jax
+    from mujoco import mjx
+
+    def run(m, d0, time, qpos, qvel, controls):
+        def one(time, qpos, qvel, controls):
+            def body(d, c):
+                d = mjx.step(m, d.replace(ctrl=c))
+                return d, (d.qpos, d.qvel)
+
+            return jax.lax.scan(body, d0.replace(time=time, qpos=qpos, qvel=qvel), controls)[1]
+
+        return jax.vmap(one)(time, qpos, qvel, controls)
+
+    return jax.jit(run)
 
 
 def batched_engine(name: str, *, device: str | None, precision: str | None) -> Engine:
