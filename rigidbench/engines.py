@@ -321,8 +321,14 @@ class MjxEngine(Engine):
         jax = self._jax()
         from mujoco import mjx
 
+        platform, _, index = self.device.partition(":")  # "cpu", "cuda:1", ...: JAX's platform, then its device
         try:
-            return mjx.put_model(model, device=jax.devices(self.device)[0])
+            device = jax.devices(platform)[int(index or 0)]
+        except (RuntimeError, IndexError, ValueError):
+            available = ", ".join(f"{d.platform}:{d.id}" for d in jax.devices())
+            raise ValueError(f"engine mjx has no device {self.device!r} here (JAX sees {available})") from None
+        try:
+            return mjx.put_model(model, device=device)
         except NotImplementedError as exc:
             raise EngineRefused(f"engine mjx cannot simulate this model: {_feature(exc)}") from None
 

@@ -172,3 +172,10 @@ def test_warp_refuses_pgs_before_simulating():
     pytest.importorskip("mujoco_warp")
     with pytest.raises(EngineRefused, match="engine warp has no PGS solver"):
         runner.check_job(runner.Job(registry.get("cue-strike"), "centre"), Settings(engine="warp"))
+
+
+def test_mjx_device_it_does_not_have_is_one_line(capsys):
+    pytest.importorskip("mujoco.mjx")
+    assert main(["run", "pendulum:one-radian", "--engine", "mjx", "--device", "cuda:7"]) == 2
+    err = capsys.readouterr().err
+    assert "engine mjx has no device 'cuda:7' here" in err and "Traceback" not in err
