@@ -168,6 +168,18 @@ def test_near_separatrix_asymmetric_top_is_refused_with_its_sensitivity():
     )
 
 
+def test_slender_asymmetric_top_counts_the_world_axes_solve_in_its_separatrix_domain():
+    """A census draw failed (omega-body 2.2e-7 > 1e-8): I1 = 4.2e-4 << I2 ~ I3 = 548 kg m^2 (kappa = I3/I1 = 1.3e6),
+    S = 6.7e3. MuJoCo solves for the acceleration in world axes, where the inertia has condition kappa; the domain's
+    rate round-off eta = 2e-14 + 0.05 eps kappa now refuses it. The same spin of a stout body (I1 = 300 kg m^2:
+    kappa ~ 2, S = 2.6e2) still runs."""
+    slender = {"I1": 0.00041973562204422154, "I2": 548.4921627186235, "I3": 548.492192413947}
+    omega = (-0.7084057799480632, -70.5998980099509, -0.002208468701871669)
+    exc = _outside("free-asymmetric-top:major-axis", {**slender, "omega": omega})
+    assert exc is not None and exc.domain == "separatrix" and "eta = 1.5e-11" in str(exc)
+    assert _outside("free-asymmetric-top:major-axis", {"I1": 300.0, "I2": 548.49, "I3": 548.5, "omega": omega}) is None
+
+
 def test_near_spherical_symmetric_top_is_refused_where_its_body_rate_turns_below_rounding():
     """Issue 13: I3 within 5e-7 of I1 left body-rate 7e-5 off: MuJoCo rounds each step's change of the rates to an
     ulp, and Omega_b h was 5e-13 rad. Refused where Omega_b h < 4.4e-8, with I1 and I3 named."""
