@@ -1,87 +1,119 @@
-"""Vector envs: gymnasium's sync vector env against the best a batched (`mujoco.rollout`) one could do.
+"""Batched vector envs against their engine's raw batched stepping and against gymnasium's SyncVectorEnv.
 
-A batched vector env would step the N copies' physics in one threaded `mujoco.rollout` call (the actions as
-``control_spec = mjSTATE_XFRC_APPLIED | mjSTATE_QFRC_APPLIED | mjSTATE_CTRL``) and still run each copy's
-Python for the observation and reward. The physics-only rollout below is an upper bound on its throughput.
+For each env, engine and N, three rates in env-steps per second (N copies x vector steps / s), zero actions:
 
-Measured (mujoco 4.0, 2 shared CPUs, load ~3.5, medians of 3 alternating 1 s rounds, env-steps/s): sync
-11.5k-12k on the tops at N = 8 and 32, physics-only 13.5k-19k; a batched implementation that wrote each
-copy's state back and scored it with the env's own hooks (bit-identical to single envs) reached 10k-13k, and
-5k-7k on TopPrecession: no faster than sync, so it was not kept. Beating sync here would take scoring the batch
-in numpy as well, for at most the physics-only bound (1.2-1.6x).
+* ``raw``: the engine alone stepping N worlds of the env's model ``frame_skip`` steps per call
+  (`rigidbench.engines.Worlds.raw_step`: C MuJoCo's `mujoco.batch`, MJX's jitted scan, Warp's captured graph),
+  with no observation, reward or transfer: the most a batched env on that engine could reach;
+* ``batched``: ``gymnasium.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point", engine=...)``;
+* ``sync``: ``gymnasium.make_vec(id, num_envs=N, vectorization_mode="sync")`` (N single envs on C MuJoCo).
 
-Usage: ``python benchmarks/vector_envs.py [--seconds 1] [--rounds 3] [--nthread 2]``
+Rounds alternate the three; the medians are printed (and written as JSON with ``--json``). The targets of issue 15:
+batched >= 0.8 raw on every engine, batched >= 1.8 sync on C MuJoCo at N = 1024.
+
+Usage: ``python benchmarks/vector_envs.py [--envs HeavyTop-v0 ...] [--ns 1 64 1024] [--engines mujoco mjx warp]
+[--device cpu] [--seconds 1] [--rounds 3] [--json out.json]``
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import platform
 import time
 
 import gymnasium as gym
 import mujoco
 import numpy as np
-from mujoco import rollout
 
 import rigidbench  # noqa: F401  (registers the envs)
+from rigidbench import engines
+
+ENVS = ("HeavyTop-v0", "SimplePendulum-v0", "StruckStick-v0", "HardSpheres-v0")
 
 
-def vector_rate(env_id: str, n: int, seconds: float, mode: str | None) -> float:
-    """Env-steps per second of ``gym.make_vec(env_id, num_envs=n, vectorization_mode=mode)``, zero actions."""
-    envs = gym.make_vec(env_id, num_envs=n, vectorization_mode=mode)
-    envs.reset(seed=0)
-    actions = np.zeros(envs.action_space.shape)
+def _rate(step, n: int, seconds: float) -> float:
+    step()  # warm: compile, capture, first touch
     count, start = 0, time.perf_counter()
     while time.perf_counter() - start < seconds:
-        envs.step(actions)
+        step()
         count += 1
-    rate = count * n / (time.perf_counter() - start)
-    envs.close()
-    return rate
+    return count * n / (time.perf_counter() - start)
 
 
-def rollout_rate(env_id: str, n: int, seconds: float, nthread: int) -> float:
-    """Env-steps per second of the physics alone: N copies, frame_skip steps each, one threaded rollout call."""
-    env = gym.make(env_id).unwrapped
+def raw_worlds(env_id: str, n: int, engine, frame_skip: int | None):
+    """The engine's worlds of the env's model, at its initial state, and their bare step."""
+    env = gym.make(env_id, frame_skip=frame_skip).unwrapped
     env.reset(seed=0)
-    model, spec = env.model, mujoco.mjtState.mjSTATE_FULLPHYSICS
-    control_spec = (
-        mujoco.mjtState.mjSTATE_XFRC_APPLIED | mujoco.mjtState.mjSTATE_QFRC_APPLIED | mujoco.mjtState.mjSTATE_CTRL
-    )
-    state = np.empty(mujoco.mj_stateSize(model, spec))
-    mujoco.mj_getState(model, env.data, state, spec)
-    states = np.tile(state, (n, 1))
-    control = np.zeros((n, 1, mujoco.mj_stateSize(model, control_spec)))
-    out = np.empty((n, env.frame_skip, state.size))
-    datas = [mujoco.MjData(model) for _ in range(nthread)]
-    models, nstep = [model] * n, env.frame_skip
-    count = 0
-    with rollout.Rollout(nthread=nthread) as pool:
-        start = time.perf_counter()
-        while time.perf_counter() - start < seconds:
-            pool.rollout(models, datas, states, control, control_spec=control_spec, nstep=nstep, state=out)
-            count += 1
-        return count * n / (time.perf_counter() - start)
+    worlds = engines.worlds(engine, env.model, n)
+    worlds.load(np.arange(n), env.data)
+    fs = env.frame_skip
+    return worlds, lambda: worlds.raw_step(fs)
+
+
+def vector_env(env_id: str, n: int, mode: str, frame_skip: int | None, **engine_kwargs):
+    kwargs = {} if frame_skip is None else {"frame_skip": frame_skip}
+    if mode == "sync":
+        envs = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync", **kwargs)
+    else:
+        envs = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs, **engine_kwargs)
+    envs.reset(seed=0)
+    actions = np.zeros(envs.action_space.shape)
+    return envs, lambda: envs.step(actions)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--envs", nargs="+", default=list(ENVS))
+    parser.add_argument("--ns", nargs="+", type=int, default=[1, 64, 1024])
+    parser.add_argument("--engines", nargs="+", default=["mujoco"], choices=engines.ENGINES)
+    parser.add_argument("--device", default=None)
+    parser.add_argument("--precision", default=None)
+    parser.add_argument("--frame-skip", type=int, default=None, help="default: each env's own")
     parser.add_argument("--seconds", type=float, default=1.0)
     parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--nthread", type=int, default=os.cpu_count())
+    parser.add_argument("--no-sync", action="store_true", help="skip SyncVectorEnv (slow to build at N = 1024)")
+    parser.add_argument("--json", default=None)
     args = parser.parse_args()
-    load = os.getloadavg()[0]
-    print(f"mujoco {mujoco.__version__}, {os.cpu_count()} CPUs (load {load:.1f}), rollout nthread = {args.nthread}")
-    print(f"{'env (env-steps/s, median)':36s} {'N':>4s} {'sync':>8s} {'physics only':>13s}")
-    for env_id in ("rigidbench/HeavyTop-v0", "rigidbench/FreeSymmetricTop-v0", "rigidbench/TopPrecession-v0"):
-        for n in (8, 32):
-            rates = {"sync": [], "physics": []}
-            for _ in range(args.rounds):
-                rates["sync"].append(vector_rate(env_id, n, args.seconds, "sync"))
-                rates["physics"].append(rollout_rate(env_id, n, args.seconds, args.nthread))
-            sync, physics = (float(np.median(rates[k])) for k in ("sync", "physics"))
-            print(f"{env_id:36s} {n:4d} {sync:8.0f} {physics:13.0f}")
+    print(
+        f"mujoco {mujoco.__version__}, {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs "
+        f"(load {os.getloadavg()[0]:.1f}); medians of {args.rounds} alternating rounds of {args.seconds:g} s"
+    )
+    print(f"{'env':22s} {'engine':18s} {'N':>5s} {'raw':>9s} {'batched':>9s} {'b/raw':>6s} {'sync':>8s} {'b/sync':>6s}")
+    rows = []
+    for name in args.envs:
+        env_id = name if "/" in name else f"rigidbench/{name}"
+        for engine_name in args.engines:
+            engine = engines.engine_for(engine_name, device=args.device, precision=args.precision)
+            label = "mujoco" if engine is None else f"{engine.name} {engine.precision} {engine.device}"
+            kw = {"engine": engine_name, "device": args.device, "precision": args.precision}
+            for n in args.ns:
+                built = {
+                    "raw": raw_worlds(env_id, n, engine, args.frame_skip),
+                    "batched": vector_env(env_id, n, "batched", args.frame_skip, **kw),
+                }
+                if engine is None and not args.no_sync:
+                    built["sync"] = vector_env(env_id, n, "sync", args.frame_skip)
+                rates: dict[str, list[float]] = {key: [] for key in built}
+                for _ in range(args.rounds):
+                    for key, (_, step) in built.items():
+                        rates[key].append(_rate(step, n, args.seconds))
+                for obj, _ in built.values():
+                    obj.close()
+                med = {key: float(np.median(v)) for key, v in rates.items()}
+                sync = med.get("sync", float("nan"))
+                row = {"env": env_id, "engine": label, "n": n, **med, "batched_over_raw": med["batched"] / med["raw"]}
+                row["batched_over_sync"] = med["batched"] / sync
+                rows.append(row)
+                print(
+                    f"{name:22s} {label:18s} {n:5d} {med['raw']:9.0f} {med['batched']:9.0f} "
+                    f"{row['batched_over_raw']:6.2f} {sync:8.0f} {row['batched_over_sync']:6.2f}",
+                    flush=True,
+                )
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"mujoco": mujoco.__version__, "cpus": os.cpu_count(), "rows": rows}, fh, indent=1)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ against the theory at every step. A subclass sets `scenario_cls` and implements 
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Mapping
 from typing import Any, ClassVar
@@ -166,6 +167,61 @@ class ScenarioEnv(gym.Env):
         Called by ``reset`` after the initial state is set and before the theory is tabulated from
         ``data.time`` on, so an episode may start at t > 0.
         """
+
+    # ---- batched hooks (`rigidbench.envs.vector`): the same four, for N copies' states at once ----------------
+    #
+    # The defaults run the single-state hooks above once per copy (through a scratch MjData for the state and the
+    # inputs), so every env works batched; a family overrides them with array code doing the same arithmetic in the
+    # same order, so a batched env equals N single envs bit for bit (tests/test_vector.py).
+
+    def _observations(self, worlds) -> np.ndarray:
+        """Observations of every copy, shape (nworld, obs_dim), from ``worlds.qpos``, ``worlds.qvel``,
+        ``worlds.time`` (`rigidbench.engines.Worlds`)."""
+        out = np.empty((worlds.nworld, *self.observation_space.shape))
+        with self._scratch() as data:
+            for i in range(worlds.nworld):
+                data.qpos[:], data.qvel[:], data.time = worlds.qpos[i], worlds.qvel[i], worlds.time[i]
+                out[i] = self._observation()
+        return out
+
+    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+        """Write every copy's (clipped) action, shape (nworld, *action_shape), into ``worlds.ctrl``,
+        ``worlds.qfrc_applied`` or ``worlds.xfrc_applied``."""
+        with self._scratch() as data:
+            for i in range(worlds.nworld):
+                data.ctrl[:], data.qfrc_applied[:], data.xfrc_applied[:] = (
+                    worlds.ctrl[i],
+                    worlds.qfrc_applied[i],
+                    worlds.xfrc_applied[i],
+                )
+                self._apply_action(actions[i])
+                worlds.ctrl[i], worlds.qfrc_applied[i], worlds.xfrc_applied[i] = (
+                    data.ctrl,
+                    data.qfrc_applied,
+                    data.xfrc_applied,
+                )
+
+    def _measures(self, obs: np.ndarray) -> np.ndarray:
+        """`_measure` of every row of `obs`, shape (nworld, len(observables))."""
+        return np.array([np.asarray(self._measure(row), dtype=float) for row in obs]).reshape(len(obs), -1)
+
+    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        """`_deviation` of every copy, shape (nworld,), from (nworld, len(observables)) arrays."""
+        return np.array([self._deviation(m, p) for m, p in zip(measured.tolist(), predicted.tolist(), strict=True)])
+
+    @contextlib.contextmanager
+    def _scratch(self):
+        """A scratch MjData of the model bound as `data` for the block (the episode's data put back after)."""
+        scratch, model = getattr(self, "_scratch_data", (None, None))
+        if model is not self.model:
+            scratch = mujoco.MjData(self.model)
+            self._scratch_data = (scratch, self.model)
+        saved = self._data
+        self.data = scratch
+        try:
+            yield scratch
+        finally:
+            self.data = saved
 
     # ---- gymnasium API ----------------------------------------------------------------------------------
 

@@ -604,6 +604,11 @@ class CueStrikeEnv(BlowEnv):
         omega_y = dot(frames.matrix_rows(q_w, q_x, q_y, q_z)[1], (w_x, w_y, w_z))
         return np.array([x, z - self._rest_height, v_x, v_z, omega_y, v_x - self._radius * omega_y])
 
+    def _observations(self, worlds) -> np.ndarray:
+        (x, _, z, q_w, q_x, q_y, q_z), (v_x, _, v_z, w_x, w_y, w_z) = self._free_joints(worlds)
+        omega_y = dot(frames.matrix_rows(q_w, q_x, q_y, q_z, sqrt=np.sqrt)[1], (w_x, w_y, w_z))
+        return np.stack([x, z - self._rest_height, v_x, v_z, omega_y, v_x - self._radius * omega_y], axis=1)
+
     def _wrench(self, action: list[float]) -> tuple[float, ...]:
         f_x, tau_y = action
         return f_x, 0.0, 0.0, 0.0, tau_y, 0.0

@@ -641,6 +641,19 @@ class HardSpheresEnv(ScenarioEnv):
     def _apply_action(self, action: np.ndarray) -> None:
         self._force[:] = action
 
+    def _observations(self, worlds) -> np.ndarray:
+        return np.concatenate([getattr(worlds, array)[:, where] for array, where in self._slices], axis=1)
+
+    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+        worlds.xfrc_applied[:, self._body_id, :3] = actions
+
+    def _measures(self, obs: np.ndarray) -> np.ndarray:
+        return obs[:, 0:3] - obs[:, 3:6]
+
+    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        d1, d2, d3 = (measured - predicted).T
+        return np.sqrt(d1 * d1 + d2 * d2 + d3 * d3) / self._a
+
     # The soft-contact solution (a closure over scipy's dense output): solved again by a copy that needs it.
     _recomputed: ClassVar[tuple[str, ...]] = ("_motion", "_motion_for")
 

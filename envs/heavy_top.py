@@ -983,3 +983,13 @@ class HeavyTopEnv(RotorEnv):
 
     def _deviation(self, measured: tuple[float], predicted: np.ndarray) -> float:
         return abs(measured[0] - float(predicted[0])) / math.pi
+
+    def _measures(self, obs: np.ndarray) -> np.ndarray:
+        w, x, y, z = obs[:, :4].T
+        r2 = x * x + y * y
+        # math.atan2 per copy, as `_measure` takes it (numpy's SIMD arctan2 may round the last bit otherwise)
+        sin_theta, cos_theta = 2.0 * np.sqrt(r2 * (w * w + z * z)), 1.0 - 2.0 * r2
+        return np.array(list(map(math.atan2, sin_theta.tolist(), cos_theta.tolist())))[:, None]
+
+    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        return np.abs(measured[:, 0] - predicted[:, 0]) / math.pi

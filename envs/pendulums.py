@@ -443,6 +443,18 @@ class PendulumEnv(ScenarioEnv):
     def _apply_action(self, action: np.ndarray) -> None:
         self._qfrc[0] = action.item()  # a Python float: cheaper to read and to store than action[0]
 
+    def _observations(self, worlds) -> np.ndarray:
+        return np.concatenate([worlds.qpos, worlds.qvel], axis=1)
+
+    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+        worlds.qfrc_applied[:, 0] = actions[:, 0]
+
+    def _measures(self, obs: np.ndarray) -> np.ndarray:
+        return obs[:, : self._nq]
+
+    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        return np.abs(measured - predicted).max(axis=1) / self._scale  # NaN propagates, as in `_deviation`
+
     def _measure(self, obs: np.ndarray) -> list[float]:
         return obs.tolist()[: self._nq]
 

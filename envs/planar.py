@@ -167,6 +167,19 @@ class BlowEnv(ScenarioEnv):
     def _apply_action(self, action: np.ndarray) -> None:
         self._xfrc[:] = self._wrench(action.tolist())
 
+    def _observations(self, worlds) -> np.ndarray:
+        # `_observation` on arrays over the copies: the same operations in the same order (heading's atan2 per copy)
+        (x, y, _, q_w, q_x, q_y, q_z), (v_x, v_y, _, w_x, w_y, w_z) = self._free_joints(worlds)
+        R = frames.matrix_rows(q_w, q_x, q_y, q_z, sqrt=np.sqrt)
+        return np.stack([x, y, headings(R), v_x, v_y, dot(R[2], (w_x, w_y, w_z))], axis=1)
+
+    def _free_joints(self, worlds) -> tuple[np.ndarray, np.ndarray]:
+        """The body's free-joint qpos and qvel components, each an array over the copies (`_free_joint`)."""
+        return worlds.qpos[:, self._free_qpos].T, worlds.qvel[:, self._free_qvel].T
+
+    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+        worlds.xfrc_applied[:, self._body_id] = np.stack(np.broadcast_arrays(*self._wrench(list(actions.T))), axis=1)
+
     def _wrench(self, action: list[float]) -> tuple[float, ...]:
         """The body's ``xfrc_applied`` row (force, then torque; world frame) for an action (already clipped)."""
         f_x, f_y, tau_z = action
@@ -191,6 +204,12 @@ class BlowEnv(ScenarioEnv):
 def heading(R_WB) -> float:
     """Angle (rad) of body y from world y, counter-clockwise about world z, from the rows of R_WB (one state)."""
     return math.atan2(-R_WB[0][1], R_WB[1][1])
+
+
+def headings(R_WB) -> np.ndarray:
+    """`heading` of each copy, from rows of arrays over the copies (`math.atan2` per copy: numpy's SIMD arctan2 may
+    round the last bit otherwise)."""
+    return np.array(list(map(math.atan2, (-R_WB[0][1]).tolist(), R_WB[1][1].tolist())))
 
 
 def dot(a, b) -> float:

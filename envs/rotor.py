@@ -194,6 +194,12 @@ class RotorEnv(ScenarioEnv):
     def _apply_action(self, action: np.ndarray) -> None:
         self._torque[:] = action
 
+    def _observations(self, worlds) -> np.ndarray:
+        return np.concatenate([worlds.qpos[:, self._quat], worlds.qvel[:, -3:]], axis=1)
+
+    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+        worlds.xfrc_applied[:, self._body_id, 3:6] = actions
+
 
 class FreeRotorEnv(RotorEnv):
     """A torque-free top's env: the theory is the body-frame omega(t) of the scenario's closed form.
@@ -213,3 +219,10 @@ class FreeRotorEnv(RotorEnv):
         # |m - p| / |p| over three Python floats: cheaper per step than numpy's temporaries (same result to an ulp)
         (m1, m2, m3), (p1, p2, p3) = measured, predicted
         return math.sqrt(((m1 - p1) ** 2 + (m2 - p2) ** 2 + (m3 - p3) ** 2) / (p1 * p1 + p2 * p2 + p3 * p3))
+
+    def _measures(self, obs: np.ndarray) -> np.ndarray:
+        return obs[:, 4:7]
+
+    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        (m1, m2, m3), (p1, p2, p3) = measured.T, predicted.T  # `_deviation`'s operations in its order
+        return np.sqrt(((m1 - p1) ** 2 + (m2 - p2) ** 2 + (m3 - p3) ** 2) / (p1 * p1 + p2 * p2 + p3 * p3))

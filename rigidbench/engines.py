@@ -413,3 +413,230 @@ def batched_engine(name: str, *, device: str | None, precision: str | None) -> E
     if precision not in (None, "float32", "float64"):
         raise ValueError(f"precision {precision!r} is not float32 or float64")
     return MjxEngine(device=device or "cpu", precision=precision or "float32")
+
+
+# ---- worlds: N copies of one model stepped together, for the batched vector envs -----------------------------
+
+
+class Worlds:
+    """N copies ("worlds") of one compiled model, stepped together by an engine: what a batched vector env steps.
+
+    The state the envs read and the inputs they write are host arrays of float64, shape (nworld, ...): `qpos`
+    (nworld, nq), `qvel` (nworld, nv) and `time` (nworld,) after each `step`; `ctrl` (nworld, nu), `qfrc_applied`
+    (nworld, nv) and `xfrc_applied` (nworld, nbody, 6), applied by the next `step`. Each engine keeps the rest of
+    its state (warm starts, its own precision) where it computes.
+
+    Attributes
+    ----------
+    model : MjModel
+    nworld : int
+    engine : Engine or None
+        None for C MuJoCo.
+    """
+
+    model: mujoco.MjModel
+    nworld: int
+    engine: Engine | None = None
+    qpos: np.ndarray
+    qvel: np.ndarray
+    time: np.ndarray
+    ctrl: np.ndarray
+    qfrc_applied: np.ndarray
+    xfrc_applied: np.ndarray
+
+    def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
+        """Put worlds `ids` (ints, sorted) in the whole integration state of `data` (the same for each)."""
+        raise NotImplementedError
+
+    def step(self, nstep: int) -> None:
+        """Advance every world `nstep` steps with the current inputs."""
+        raise NotImplementedError
+
+    def raw_step(self, nstep: int) -> None:
+        """The engine's bare batched step, with no transfer of inputs or state (what a batched env's rate is
+        compared with: `benchmarks/vector_envs.py`); C MuJoCo's is `step` itself."""
+        self.step(nstep)
+
+    def close(self) -> None:
+        """Release what the engine holds (threads, device memory)."""
+
+
+_INTEGRATION = mujoco.mjtState.mjSTATE_INTEGRATION
+
+
+class CWorlds(Worlds):
+    """C MuJoCo's `mujoco.batch.Batch`: each world is one mjSTATE_INTEGRATION row (state, inputs and the solver's
+    warm start), stepped on `nthread` threads in C, bit for bit as a loop of `mj_step` over one MjData per world
+    (MuJoCo's own guarantee; `tests/test_vector.py` checks it against single envs). The state and input arrays are
+    views of the rows: nothing is copied between the envs and the engine."""
+
+    def __init__(self, model: mujoco.MjModel, nworld: int, *, nthread: int | None = None) -> None:
+        import os
+
+        from mujoco import batch
+
+        self.model, self.nworld = model, int(nworld)
+        nthread = min(self.nworld, os.cpu_count() or 1) if nthread is None else int(nthread)
+        self._batch = batch.Batch(model, self.nworld, nthread=nthread)
+        for name in ("qpos", "qvel", "time", "ctrl", "qfrc_applied", "xfrc_applied"):
+            setattr(self, name, self._batch.bind(name))
+        self._row = np.empty(mujoco.mj_stateSize(model, _INTEGRATION))
+
+    def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
+        mujoco.mj_getState(self.model, data, self._row, _INTEGRATION)
+        self._batch.state[ids] = self._row
+
+    def step(self, nstep: int) -> None:
+        self._batch.step(nstep=nstep)
+
+
+class MjxWorlds(Worlds):
+    """MJX: the worlds as one vmapped `mjx.Data` on the engine's device, `nstep` steps a jitted `lax.scan` (compiled
+    once per model structure, world count and step count); the inputs go up and qpos, qvel come down each step."""
+
+    def __init__(self, engine: MjxEngine, model: mujoco.MjModel, nworld: int) -> None:
+        jax = engine._jax()
+        from jax import numpy as jp
+        from mujoco import mjx
+
+        self.engine, self.model, self.nworld = engine, model, int(nworld)
+        self._jp = jp
+        self._dtype = jp.float64 if engine.precision == "float64" else jp.float32
+        self._m = engine._model_on_device(model)
+        d0 = mjx.put_data(model, mujoco.MjData(model))
+        shapes = jax.eval_shape(lambda d: mjx.step(self._m, d), d0)  # as `MjxEngine.rollout`: the step's dtypes
+        d0 = jax.tree_util.tree_map(lambda x, like: jp.asarray(x, like.dtype), d0, shapes)
+        self._d = jax.tree_util.tree_map(lambda x: jp.broadcast_to(x, (self.nworld, *x.shape)), d0)
+        self._host_inputs()
+        self._steps = 0
+
+    def _host_inputs(self) -> None:
+        n, m = self.nworld, self.model
+        self.qpos, self.qvel = np.zeros((n, m.nq)), np.zeros((n, m.nv))
+        self.time, self.ctrl = np.zeros(n), np.zeros((n, m.nu))
+        self.qfrc_applied, self.xfrc_applied = np.zeros((n, m.nv)), np.zeros((n, m.nbody, 6))
+        self._t0, self._k = np.zeros(n), np.zeros(n, dtype=np.int64)
+
+    def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
+        self.qpos[ids], self.qvel[ids] = data.qpos, data.qvel
+        self._t0[ids], self._k[ids] = data.time, 0
+        self.time[ids] = data.time
+        jp = self._jp
+        self._d = self._d.replace(
+            qpos=jp.asarray(self.qpos, self._dtype),
+            qvel=jp.asarray(self.qvel, self._dtype),
+            time=jp.asarray(self.time, self._dtype),
+        )
+
+    def step(self, nstep: int) -> None:
+        dtype = self._dtype
+        jp = self._jp
+        inputs = [jp.asarray(a, dtype) for a in (self.ctrl, self.qfrc_applied, self.xfrc_applied)]
+        self._d, qpos, qvel = _mjx_worlds_program(nstep)(self._m, self._d, *inputs)
+        self.qpos[:], self.qvel[:] = np.asarray(qpos), np.asarray(qvel)
+        self._k += nstep
+        self.time[:] = self._t0 + self.model.opt.timestep * self._k  # the step count is the clock (`clock`)
+
+    def raw_step(self, nstep: int) -> None:
+        """The engine's bare batched step (no transfers): what `benchmarks/vector_envs.py` compares the env with."""
+        inputs = [self._jp.zeros(a.shape, self._dtype) for a in (self.ctrl, self.qfrc_applied, self.xfrc_applied)]
+        self._d, qpos, _ = _mjx_worlds_program(nstep)(self._m, self._d, *inputs)
+        qpos.block_until_ready()
+
+
+@functools.cache
+def _mjx_worlds_program(nstep: int):
+    """`nstep` MJX steps of every world with the given inputs, jitted once per step count (model and data are
+    arguments, as in `_mjx_program`)."""
+    import jax
+    from mujoco import mjx
+
+    def run(m, d, ctrl, qfrc, xfrc):
+        def one(d, ctrl, qfrc, xfrc):
+            d = d.replace(ctrl=ctrl, qfrc_applied=qfrc, xfrc_applied=xfrc)
+            d = jax.lax.fori_loop(0, nstep, lambda _, d: mjx.step(m, d), d)
+            return d, d.qpos, d.qvel
+
+        return jax.vmap(one)(d, ctrl, qfrc, xfrc)
+
+    return jax.jit(run)
+
+
+class WarpWorlds(Worlds):
+    """MuJoCo Warp: one `mjw.Data` of `nworld` worlds; `nstep` steps captured once as a Warp graph (as in
+    `WarpEngine.rollout`), the inputs assigned before and qpos, qvel copied back after each launch."""
+
+    def __init__(self, engine: WarpEngine, model: mujoco.MjModel, nworld: int) -> None:
+        import mujoco_warp as mjw
+        import warp as wp
+
+        self.engine, self.model, self.nworld = engine, model, int(nworld)
+        self._wp = wp
+        with _WARP_LOCK, wp.ScopedDevice(engine.device):
+            self._m = engine._model_on_device(model)
+            self._d = mjw.put_data(model, mujoco.MjData(model), nworld=self.nworld)
+        MjxWorlds._host_inputs(self)
+        self._graphs: dict[int, Any] = {}
+
+    def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
+        self.qpos[ids], self.qvel[ids] = data.qpos, data.qvel
+        self._t0[ids], self._k[ids] = data.time, 0
+        self.time[ids] = data.time
+        with _WARP_LOCK, self._wp.ScopedDevice(self.engine.device):
+            self._d.qpos.assign(self.qpos.astype(np.float32))
+            self._d.qvel.assign(self.qvel.astype(np.float32))
+            self._d.qacc_warmstart.zero_()
+
+    def _graph(self, nstep: int):
+        import mujoco_warp as mjw
+
+        wp = self._wp
+        if nstep not in self._graphs:
+            mjw.step(self._m, self._d)  # compile and load every kernel before capturing: one step, undone below
+            qpos, qvel = self.qpos.astype(np.float32), self.qvel.astype(np.float32)
+            self._d.qpos.assign(qpos)
+            self._d.qvel.assign(qvel)
+            with wp.ScopedCapture(force_module_load=False) as capture:
+                for _ in range(nstep):
+                    mjw.step(self._m, self._d)
+            self._graphs[nstep] = capture.graph
+        return self._graphs[nstep]
+
+    def step(self, nstep: int) -> None:
+        wp = self._wp
+        with _WARP_LOCK, wp.ScopedDevice(self.engine.device):
+            self._d.ctrl.assign(self.ctrl.astype(np.float32))
+            self._d.qfrc_applied.assign(self.qfrc_applied.astype(np.float32))
+            self._d.xfrc_applied.assign(self.xfrc_applied.astype(np.float32))
+            wp.capture_launch(self._graph(nstep))
+            self.qpos[:], self.qvel[:] = self._d.qpos.numpy(), self._d.qvel.numpy()
+        self._k += nstep
+        self.time[:] = self._t0 + self.model.opt.timestep * self._k
+
+    def raw_step(self, nstep: int) -> None:
+        """The engine's bare batched step (a graph launch, no transfers)."""
+        with _WARP_LOCK, self._wp.ScopedDevice(self.engine.device):
+            self._wp.capture_launch(self._graph(nstep))
+            self._wp.synchronize()
+
+
+def worlds(engine: Engine | None, model: mujoco.MjModel, nworld: int, *, nthread: int | None = None) -> Worlds:
+    """`nworld` copies of `model` on `engine` (None: C MuJoCo, on `nthread` threads, default every CPU).
+
+    Raises
+    ------
+    EngineRefused
+        If the engine cannot simulate the model (`Engine.check`).
+    ValueError
+        For ``nworld < 1``.
+    """
+    if int(nworld) < 1:
+        raise ValueError(f"num_envs = {nworld!r} must be an integer >= 1")
+    if engine is None:
+        return CWorlds(model, nworld, nthread=nthread)
+    engine.check(model)
+    if isinstance(engine, MjxEngine):
+        return MjxWorlds(engine, model, nworld)
+    if isinstance(engine, WarpEngine):
+        return WarpWorlds(engine, model, nworld)
+    raise ValueError(f"engine {engine.name!r} has no batched worlds")

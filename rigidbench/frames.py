@@ -38,14 +38,15 @@ def _quat_to_matrix_one(w: float, x: float, y: float, z: float) -> np.ndarray:
     return np.array(matrix_rows(w, x, y, z))
 
 
-def matrix_rows(w: float, x: float, y: float, z: float) -> tuple[tuple[float, float, float], ...]:
+def matrix_rows(w, x, y, z, sqrt=math.sqrt) -> tuple[tuple[float, float, float], ...]:
     """R_WB of one quaternion (w, x, y, z), normalised first, as three rows of Python floats: `quat_to_matrix`
-    for a single state (an env step) without arrays.
+    for a single state (an env step) without arrays. With ``sqrt=np.sqrt`` the components may be arrays (one
+    element per copy of a batched env: rows of arrays, the same bits as each copy's floats).
 
     The operations of the vectorised path in the same order (numpy sums the 4 squares left to right), so the
     same bits: tests/test_performance.py checks it.
     """
-    n = math.sqrt(w * w + x * x + y * y + z * z)
+    n = sqrt(w * w + x * x + y * y + z * z)
     w, x, y, z = w / n, x / n, y / n, z / n
     return (
         (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),

@@ -84,6 +84,14 @@ def register_envs() -> None:
     """Register every env with gymnasium (idempotent)."""
     import gymnasium
 
+    from rigidbench.envs.task import TaskEnv
+    from rigidbench.envs.vector import vector_entry_point
+
     for env_id, cls in env_classes().items():
         if env_id not in gymnasium.registry:
-            gymnasium.register(id=env_id, entry_point=f"{cls.__module__}:{cls.__qualname__}")
+            # The validation envs also have a batched vector env (`rigidbench.envs.vector`); the control tasks run
+            # under gymnasium's sync and async vector envs.
+            batched = None if issubclass(cls, TaskEnv) else vector_entry_point(cls)
+            gymnasium.register(
+                id=env_id, entry_point=f"{cls.__module__}:{cls.__qualname__}", vector_entry_point=batched
+            )

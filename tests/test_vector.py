@@ -1,11 +1,16 @@
 """`gymnasium.make_vec` for every env: N copies give the same results as N single envs, bit for bit.
 
-Every env uses gymnasium's sync vector env: a batched one (the copies' physics in one threaded mujoco.rollout)
-was measured no faster on the tops (benchmarks/vector_envs.py) and is not registered.
+Gymnasium's sync vector env works for every env; every validation env also has a batched vector env
+(``vectorization_mode="vector_entry_point"``, `rigidbench.envs.vector`: the copies' physics one `mujoco.batch` call,
+their observations and rewards in arrays), which must equal the sync one bit for bit on C MuJoCo: observations,
+rewards, terminations, truncations and every number in ``info``, through autoresets and clipped actions.
 """
 
 import gymnasium as gym
 import numpy as np
+import pytest
+
+from rigidbench.registry import env_classes
 
 
 def test_make_vec_matches_single_envs_bit_for_bit(env_id):
@@ -41,3 +46,96 @@ def test_task_methods_reach_every_copy_of_a_vector_env():
     _obs, _rewards, terminated, _trunc, info = envs.step(actions)
     assert terminated.all() and np.all(np.abs(info["regret"]) < 1e-5)
     envs.close()
+
+
+def _assert_infos_equal(expected: dict, got: dict, where: str) -> None:
+    """Same keys, masks and numbers (NaN equal to NaN) as gymnasium's merged infos; object arrays (the reset's
+    case, params and settings) compared element by element."""
+    assert set(expected) == set(got), f"{where}: keys differ: {set(expected) ^ set(got)}"
+    for key, value in expected.items():
+        if isinstance(value, dict):
+            _assert_infos_equal(value, got[key], f"{where}/{key}")
+        elif value.dtype == object:
+            assert list(value) == list(got[key]), f"{where}/{key}"
+        else:
+            assert value.dtype == got[key].dtype, f"{where}/{key}: {value.dtype} != {got[key].dtype}"
+            np.testing.assert_array_equal(got[key], value, err_msg=f"{where}/{key}")
+
+
+def _run_both(env_id: str, n: int, steps: int, seed: int = 0, **kwargs) -> int:
+    """Step a sync and a batched vector env of `env_id` side by side with the same random actions (some outside
+    the action space, so clipping is exercised); assert every output equal; return the number of episode ends."""
+    sync = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync", **kwargs)
+    batched = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
+    (obs_s, info_s), (obs_b, info_b) = sync.reset(seed=seed), batched.reset(seed=seed)
+    np.testing.assert_array_equal(obs_b, obs_s)
+    _assert_infos_equal(info_s, info_b, "reset")
+    rng = np.random.default_rng(seed)
+    high = sync.single_action_space.high
+    ends = 0
+    for t in range(steps):
+        actions = rng.uniform(-0.3, 0.3, sync.action_space.shape) * high
+        actions[t % n] *= 5.0  # beyond the action space: clipped by both
+        out_s, out_b = sync.step(actions), batched.step(actions)
+        for name, a, b in zip(("obs", "reward", "terminated", "truncated"), out_s[:4], out_b[:4], strict=True):
+            np.testing.assert_array_equal(b, a, err_msg=f"{env_id} step {t}: {name}")
+        _assert_infos_equal(out_s[4], out_b[4], f"{env_id} step {t}")
+        ends += int(out_s[2].sum() + out_s[3].sum())
+    sync.close()
+    batched.close()
+    return ends
+
+
+def test_batched_vector_env_equals_sync_bit_for_bit(validation_env_id):
+    """Every validation env, 3 copies, 60 steps at 5x its frame skip (the fast envs end episodes and autoreset)."""
+    frame_skip = 5 * env_classes()[validation_env_id].default_frame_skip
+    _run_both(validation_env_id, 3, 60, frame_skip=frame_skip)
+
+
+def test_batched_vector_env_autoresets_as_sync_does():
+    """HeavyTop at 50 steps a call ends its first episode within 100 calls: the next call restarts it (reward 0, the
+    reset's info), in both vector envs alike."""
+    assert _run_both("rigidbench/HeavyTop-v0", 4, 100, frame_skip=50) >= 4
+
+
+def test_batched_vector_env_reset_options_set_the_whole_batch():
+    envs = gym.make_vec("rigidbench/HeavyTop-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    single = gym.make("rigidbench/HeavyTop-v0")
+    obs, info = envs.reset(options={"case": "looping", "params": {"spin": 150.0}})
+    expected, _ = single.reset(options={"case": "looping", "params": {"spin": 150.0}})
+    np.testing.assert_array_equal(obs, [expected, expected])
+    assert list(info["case"]) == ["looping", "looping"] and np.all(info["params"]["spin"] == 150.0)
+    envs.close()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"num_envs": 0}, "num_envs = 0 must be an integer >= 1"),
+        ({"num_envs": 2, "render_mode": "rgb_array"}, "render_mode"),
+        ({"num_envs": 2, "engine": "bullet"}, "engine 'bullet' is not one of"),
+        ({"num_envs": 2, "engine": "mujoco", "precision": "float32"}, "engine mujoco runs on the cpu in float64"),
+        ({"num_envs": 2, "case": "spinning"}, "spinning"),
+    ],
+)
+def test_batched_vector_env_refuses_bad_arguments_by_name(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        gym.make_vec("rigidbench/HeavyTop-v0", vectorization_mode="vector_entry_point", **kwargs)
+
+
+def test_batched_vector_env_refuses_bad_actions_by_name():
+    envs = gym.make_vec("rigidbench/SimplePendulum-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    with pytest.raises(RuntimeError, match="reset"):
+        envs.step(np.zeros((2, 1)))
+    envs.reset(seed=0)
+    with pytest.raises(ValueError, match=r"actions shape \(3, 1\) != \(2, 1\)"):
+        envs.step(np.zeros((3, 1)))
+    with pytest.raises(ValueError, match="action of env 1 .* is not finite"):
+        envs.step(np.array([[0.0], [np.nan]]))
+    envs.close()
+
+
+def test_control_tasks_have_no_batched_vector_env():
+    """The tasks draw targets and simulate baselines per copy: gymnasium's sync and async vector envs run them."""
+    with pytest.raises(gym.error.Error, match="vector entry point"):
+        gym.make_vec("rigidbench/CueShot-v0", num_envs=2, vectorization_mode="vector_entry_point")

@@ -1,0 +1,260 @@
+"""Batched vector envs: N copies of a scenario env stepped as one engine batch (issue 15).
+
+``gymnasium.make_vec("rigidbench/HeavyTop-v0", num_envs=N, vectorization_mode="vector_entry_point")`` builds a
+`VectorScenarioEnv`: one template env resolves the case, builds the model, sets the initial state and tabulates the
+theory (`ScenarioEnv._load`), and the N copies' physics run as one batch on an engine (`rigidbench.engines.worlds`:
+C MuJoCo's `mujoco.batch`, MJX or MuJoCo Warp). Observations, measurements, deviations and rewards are computed
+for the whole batch in arrays (the env's batched hooks, `ScenarioEnv._observations` and its siblings), not by N
+Python calls.
+
+On the C engine a batched env equals gymnasium's `SyncVectorEnv` of the same env bit for bit (observations,
+rewards, terminations, truncations and the numbers in ``info``; `tests/test_vector.py`); on MJX and Warp it equals
+it to within the engine's precision. One difference is deliberate: ``reset(options=...)`` sets the case and
+parameters of the whole batch, and an autoreset restarts that configuration (a `SyncVectorEnv` sub-env's autoreset
+returns to its constructor's arguments).
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import AutoresetMode
+from gymnasium.vector.utils import batch_space
+
+from rigidbench import engines
+from rigidbench.envs.base import DEVIATION_CAP, ScenarioEnv
+
+
+class VectorScenarioEnv(gym.vector.VectorEnv):
+    """N copies of a validation env on one engine batch (autoreset: next step, as gymnasium's default).
+
+    Parameters
+    ----------
+    env_cls : type of ScenarioEnv
+        The single env (`rigidbench.registry.env_classes`).
+    num_envs : int
+        Number of copies (>= 1).
+    engine : {"mujoco", "warp", "mjx"}
+        What steps the batch (default C MuJoCo; `rigidbench.engines`).
+    device : str, optional
+        The engine's device (``"cpu"``, ``"cuda:0"``); C MuJoCo runs on the CPU.
+    precision : {"float32", "float64"}, optional
+        MJX's float precision (Warp: float32 only; C MuJoCo: float64 only).
+    nthread : int, optional
+        C MuJoCo's threads (default: every CPU).
+    **env_kwargs :
+        The single env's arguments (``case``, ``params``, ``profile``, ``integrator``, ``timestep``,
+        ``frame_skip``); ``render_mode`` is not supported by the batch.
+
+    Raises
+    ------
+    ValueError
+        For ``num_envs < 1``, a render mode, an unknown or uninstalled engine, or a model the engine cannot simulate
+        (`rigidbench.engines.EngineRefused`, naming the engine and the feature).
+    """
+
+    def __init__(
+        self,
+        env_cls: type[ScenarioEnv],
+        num_envs: int,
+        *,
+        engine: str | None = None,
+        device: str | None = None,
+        precision: str | None = None,
+        nthread: int | None = None,
+        **env_kwargs: Any,
+    ) -> None:
+        if not isinstance(num_envs, int | np.integer) or num_envs < 1:
+            raise ValueError(f"num_envs = {num_envs!r} must be an integer >= 1")
+        if env_kwargs.get("render_mode") is not None:
+            raise ValueError("render_mode: a batched vector env does not render (render one copy with gymnasium.make)")
+        env_kwargs.pop("render_mode", None)
+        self.num_envs = int(num_envs)
+        self._engine = engines.engine_for(engine, device=device, precision=precision)
+        self._nthread = nthread
+        self.env = env_cls(**env_kwargs)  # the template: resolves, builds, predicts and scores through its hooks
+        self.single_observation_space = self.env.observation_space
+        self.single_action_space = self.env.action_space
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.metadata = {**self.env.metadata, "autoreset_mode": AutoresetMode.NEXT_STEP}
+        self.render_mode = None
+        self._worlds: dict[int, engines.Worlds] = {}  # by id of the template's model
+        self._options: dict[str, Any] = {}
+        self._autoreset = np.zeros(self.num_envs, dtype=bool)
+        self._k = np.zeros(self.num_envs, dtype=np.int64)
+        self._every = np.ones(self.num_envs, dtype=bool)
+        self._ready = False
+
+    # ---- the episode's configuration, from the template --------------------------------------------------------
+
+    def _start_episode(self, seed: int | None) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset the template for the batch's configuration; its state, theory table and reset info."""
+        env = self.env
+        obs, info = env.reset(seed=seed, options=self._options)
+        model = env.model
+        if id(model) not in self._worlds:
+            for worlds in self._worlds.values():
+                worlds.close()
+            self._worlds = {id(model): engines.worlds(self._engine, model, self.num_envs, nthread=self._nthread)}
+        self.worlds = self._worlds[id(model)]
+        self._table = np.array(env._rows, dtype=float)
+        self._obs0, self._info0 = obs, info
+        self._data0 = copy.copy(env.data)  # the episode's initial state, for every copy's (auto)reset
+        self._frame_skip = env.frame_skip
+        return obs, info
+
+    def reset(self, *, seed: int | list[int] | None = None, options: Mapping[str, Any] | None = None):
+        """Reset every copy to the configuration ``options`` names (``case``, ``params``; kept for autoresets).
+
+        A list of seeds is accepted as gymnasium's vector envs take it; the validation envs draw nothing at random,
+        so the copies start alike whatever their seeds.
+        """
+        if isinstance(seed, list | tuple):
+            if len(seed) != self.num_envs:
+                raise ValueError(f"{len(seed)} seeds for {self.num_envs} envs")
+            seed = seed[0]
+        self._options = dict(options or {})
+        obs, info = self._start_episode(seed)
+        ids = np.arange(self.num_envs)
+        self.worlds.load(ids, self._data0)
+        self._k[:] = 0
+        self._autoreset[:] = False
+        self._ready = True
+        return np.tile(obs, (self.num_envs, 1)), _put({}, info, ids, self.num_envs)
+
+    # ---- a step of every copy -------------------------------------------------------------------------------
+
+    def step(self, actions):
+        if not self._ready:
+            raise RuntimeError("call reset() before step()")
+        env, worlds = self.env, self.worlds
+        actions = self._checked(actions)
+        restart = np.flatnonzero(self._autoreset)
+        env._apply_actions(actions, worlds)
+        worlds.step(self._frame_skip)
+        self._k += 1
+        k = self._k
+        obs = env._observations(worlds)
+        time = worlds.time.copy()
+        table = self._table
+        inside = k < len(table)
+        if inside.all():
+            predicted = table[k]
+        else:
+            predicted = np.array(
+                [table[i] if inside[j] else env._theory(np.array([time[j]]))[0] for j, i in enumerate(k.tolist())]
+            )
+        measured = np.asarray(env._measures(obs), dtype=float)
+        deviation = np.asarray(env._deviations(measured, predicted), dtype=float)
+        reward = np.where(deviation <= DEVIATION_CAP, -deviation, -DEVIATION_CAP)
+        # `ScenarioEnv.step`'s divergence test, for every copy: time fell behind (MuJoCo reset a blown-up state) or
+        # the observation is not finite.
+        diverged = (time < env._behind + k * env._env_dt) | ~np.isfinite(obs.sum(axis=1))
+        terminated = diverged.copy()
+        truncated = (time >= env._end) & ~diverged
+        infos = self._step_infos(time, measured, predicted, deviation, reward, diverged)
+        for j in np.flatnonzero(diverged):
+            self._diverged(j, obs, reward, infos)
+        if restart.size:
+            self._restart(restart, obs, reward, terminated, truncated, infos)
+        self._autoreset = terminated | truncated
+        return obs, reward, terminated, truncated, infos
+
+    def _checked(self, actions) -> np.ndarray:
+        actions = np.asarray(actions, dtype=np.float64)
+        shape = (self.num_envs, *self.single_action_space.shape)
+        if actions.shape != shape:
+            raise ValueError(f"actions shape {actions.shape} != {shape}")
+        if not np.isfinite(actions).all():
+            bad = int(np.flatnonzero(~np.isfinite(actions).reshape(self.num_envs, -1).all(axis=1))[0])
+            raise ValueError(f"action of env {bad} {actions[bad]} is not finite")
+        space = self.single_action_space
+        return np.clip(actions, space.low, space.high)  # out-of-range actions are clipped, as the single env does
+
+    def _step_infos(self, time, measured, predicted, deviation, reward, diverged) -> dict[str, Any]:
+        """The infos of a step, as gymnasium's vector envs merge the single envs' (each key with its ``_key`` mask)."""
+        names = self.env._observable_names
+        every = self._every  # each key gets a mask of its own, as gymnasium's are: copies of one
+
+        def columns(values: np.ndarray) -> dict[str, Any]:
+            out: dict[str, Any] = {}
+            for i, name in enumerate(names):
+                out[name], out[f"_{name}"] = values[:, i].copy(), every.copy()
+            return out
+
+        infos: dict[str, Any] = {}
+        for key, value in (
+            ("time", time),
+            ("measured", columns(measured)),
+            ("predicted", columns(predicted)),
+            ("deviation", deviation),
+            ("reward_deviation", reward.copy()),
+            ("diverged", diverged.copy()),
+        ):
+            infos[key], infos[f"_{key}"] = value, every.copy()
+        return infos
+
+    def _diverged(self, j: int, obs: np.ndarray, reward: np.ndarray, infos: dict[str, Any]) -> None:
+        """Copy `j` diverged: `ScenarioEnv._diverged_step`'s observation, reward and info, in place."""
+        obs[j], reward[j], _, _, info = self.env._diverged_step(obs[j], int(self._k[j]), float(infos["time"][j]))
+        for key in ("deviation", "reward_deviation"):
+            infos[key][j] = info[key]
+        for name in self.env._observable_names:
+            infos["measured"][name][j] = math.nan
+
+    def _restart(self, ids, obs, reward, terminated, truncated, infos) -> None:
+        """Copies whose episode ended on the last step start again (gymnasium's next-step autoreset): their step
+        was not taken; they return the first observation, reward 0, and the reset's info."""
+        self.worlds.load(ids, self._data0)
+        self._k[ids] = 0
+        obs[ids] = self._obs0
+        reward[ids] = 0.0
+        terminated[ids] = truncated[ids] = False
+        _put(infos, self._info0, ids, self.num_envs)
+
+    def close_extras(self, **kwargs) -> None:
+        for worlds in self._worlds.values():
+            worlds.close()
+        self._worlds = {}
+        self.env.close()
+
+
+def _put(infos: dict[str, Any], info: Mapping[str, Any], ids: np.ndarray, n: int) -> dict[str, Any]:
+    """`gymnasium.vector.VectorEnv._add_info` for the same `info` at several copies `ids` at once: each key an array
+    over the copies (dtype as gymnasium chooses it) and a ``_key`` mask; nested dicts recursively."""
+    for key, value in info.items():
+        if isinstance(value, dict):
+            array = _put(infos.get(key, {}), value, ids, n)
+        else:
+            array = infos.get(key)
+            if array is None:
+                if type(value) in (int, float, bool) or isinstance(value, np.number):
+                    array = np.zeros(n, dtype=type(value))
+                elif isinstance(value, np.ndarray):
+                    array = np.zeros((n, *value.shape), dtype=value.dtype)
+                else:
+                    array = np.full(n, None, dtype=object)
+            if array.dtype == object:
+                for i in ids:
+                    array[i] = value
+            else:
+                array[ids] = value
+        mask = infos.get(f"_{key}")
+        if mask is None:
+            mask = np.zeros(n, dtype=bool)
+        mask[ids] = True
+        infos[key], infos[f"_{key}"] = array, mask
+    return infos
+
+
+def vector_entry_point(env_cls: type[ScenarioEnv]) -> functools.partial:
+    """The callable gymnasium's ``vector_entry_point`` holds for `env_cls` (`rigidbench.registry.register_envs`): a
+    partial of module-level names, so an env's spec (which holds it) can be pickled."""
+    return functools.partial(VectorScenarioEnv, env_cls)
