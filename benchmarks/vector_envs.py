@@ -85,9 +85,11 @@ def main() -> None:
     for name in args.envs:
         env_id = name if "/" in name else f"rigidbench/{name}"
         for engine_name in args.engines:
-            engine = engines.engine_for(engine_name, device=args.device, precision=args.precision)
+            # --device and --precision are the batched engines' (C MuJoCo runs on the CPU in float64)
+            device, precision = (None, None) if engine_name == "mujoco" else (args.device, args.precision)
+            engine = engines.engine_for(engine_name, device=device, precision=precision)
             label = "mujoco" if engine is None else f"{engine.name} {engine.precision} {engine.device}"
-            kw = {"engine": engine_name, "device": args.device, "precision": args.precision}
+            kw = {"engine": engine_name, "device": device, "precision": precision}
             for n in args.ns:
                 built = {
                     "raw": raw_worlds(env_id, n, engine, args.frame_skip),

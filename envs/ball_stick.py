@@ -376,3 +376,11 @@ class BallStickEnv(BlowEnv):
             return 0.0
         (v_x, omega_z), (v_x_theory, omega_z_theory) = measured, predicted
         return abs(v_x - v_x_theory) / self._v_scale + abs(omega_z - omega_z_theory) / self._omega_scale
+
+    def _measures(self, obs: np.ndarray) -> np.ndarray:
+        return obs[:, [3, 5]]
+
+    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        (v_x, omega_z), (v_x_theory, omega_z_theory) = measured.T, predicted.T
+        deviation = np.abs(v_x - v_x_theory) / self._v_scale + np.abs(omega_z - omega_z_theory) / self._omega_scale
+        return np.where(np.isnan(predicted).any(axis=1), 0.0, deviation)

@@ -625,3 +625,9 @@ class CueStrikeEnv(BlowEnv):
 
     def _deviation(self, measured: list[float], predicted: list[float]) -> float:
         return abs(measured[0] - predicted[0]) / self._x_scale
+
+    def _measures(self, obs: np.ndarray) -> np.ndarray:
+        return obs[:, [0, 2, 5]]
+
+    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        return np.abs(measured[:, 0] - predicted[:, 0]) / self._x_scale

@@ -361,3 +361,9 @@ class MarbleShotEnv(BlowEnv):
 
     def _deviation(self, measured: list[float], predicted: list[float]) -> float:
         return self._pose_deviation(measured, predicted)
+
+    def _measures(self, obs: np.ndarray) -> np.ndarray:
+        return obs[:, :3]
+
+    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        return self._pose_deviations(measured, predicted)

@@ -307,3 +307,11 @@ class PivotedStickEnv(BlowEnv):
     def _deviation(self, measured: list[float], predicted: list[float]) -> float:
         (heading, drift), (heading_theory, _) = measured, predicted
         return abs(wrap_angle(heading - heading_theory)) / math.pi + drift / self._length
+
+    def _measures(self, obs: np.ndarray) -> np.ndarray:
+        # math.hypot per copy, as `_measure` takes it (CPython's hypot is its own algorithm, not libm's)
+        return np.stack([obs[:, 2], list(map(math.hypot, obs[:, 0].tolist(), obs[:, 1].tolist()))], axis=1)
+
+    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        (heading, drift), (heading_theory, _) = measured.T, predicted.T
+        return np.abs(wrap_angle(heading - heading_theory)) / math.pi + drift / self._length

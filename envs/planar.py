@@ -178,7 +178,9 @@ class BlowEnv(ScenarioEnv):
         return worlds.qpos[:, self._free_qpos].T, worlds.qvel[:, self._free_qvel].T
 
     def _apply_actions(self, actions: np.ndarray, worlds) -> None:
-        worlds.xfrc_applied[:, self._body_id] = np.stack(np.broadcast_arrays(*self._wrench(list(actions.T))), axis=1)
+        xfrc = worlds.xfrc_applied[:, self._body_id]
+        for j, column in enumerate(self._wrench(list(actions.T))):  # columns of copies, or 0.0
+            xfrc[:, j] = column
 
     def _wrench(self, action: list[float]) -> tuple[float, ...]:
         """The body's ``xfrc_applied`` row (force, then torque; world frame) for an action (already clipped)."""
@@ -200,6 +202,12 @@ class BlowEnv(ScenarioEnv):
         (x, y, h), (x_p, y_p, h_p) = measured, predicted
         return (abs(x - x_p) + abs(y - y_p)) / self._length + abs(wrap_angle(h - h_p)) / math.pi
 
+    def _pose_deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        """`_pose_deviation` of every copy, from (nworld, 3) arrays."""
+        (x, y, h), (x_p, y_p, h_p) = measured.T, predicted.T
+        deviation = (np.abs(x - x_p) + np.abs(y - y_p)) / self._length + np.abs(wrap_angle(h - h_p)) / math.pi
+        return np.where(np.isnan(predicted).any(axis=1), 0.0, deviation)
+
 
 def heading(R_WB) -> float:
     """Angle (rad) of body y from world y, counter-clockwise about world z, from the rows of R_WB (one state)."""
@@ -217,8 +225,8 @@ def dot(a, b) -> float:
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def wrap_angle(angle: float) -> float:
-    """`angle` (rad) wrapped to [-pi, pi)."""
+def wrap_angle(angle):
+    """`angle` (rad; a float or an array) wrapped to [-pi, pi)."""
     return (angle + math.pi) % (2 * math.pi) - math.pi
 
 

@@ -171,10 +171,7 @@ class WarpEngine(Engine):
             )
 
     def _model_on_device(self, model: mujoco.MjModel):
-        import mujoco_warp as mjw
-        import warp as wp
-
-        wp.config.quiet = True
+        wp, mjw = _warp()
         try:
             with _WARP_LOCK, wp.ScopedDevice(self.device):
                 wp.init()
@@ -194,9 +191,7 @@ class WarpEngine(Engine):
     def _rollout(
         self, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None
     ) -> np.ndarray:
-        import mujoco_warp as mjw
-        import warp as wp
-
+        wp, mjw = _warp()
         t, q, v = _layout(model)
         nbatch = len(states0)
         from rigidbench.warp_kernels import advance, record, set_ctrl
@@ -244,6 +239,19 @@ class WarpEngine(Engine):
             out[:, :, v] = np.swapaxes(vs.numpy(), 0, 1)
         out[:, :, t] = clock(states0[:, 0], model.opt.timestep, nstep)[..., None]
         return out
+
+
+def _warp():
+    """warp and mujoco_warp, imported with Warp's messages off (importing mujoco_warp initialises Warp, which
+    prints its banner and then a line per kernel module it loads unless told to be quiet first)."""
+    import warp as wp
+
+    wp.config.quiet = True
+    if hasattr(wp, "LOG_WARNING"):  # warp-lang >= 1.19 says what it logs by level: module loads are info
+        wp.config.log_level = wp.LOG_WARNING
+    import mujoco_warp as mjw
+
+    return wp, mjw
 
 
 # Warp compiles and loads kernels on first use and captures graphs per thread; two cases doing that at once (the
@@ -502,6 +510,7 @@ class MjxWorlds(Worlds):
         self.engine, self.model, self.nworld = engine, model, int(nworld)
         self._jp = jp
         self._dtype = jp.float64 if engine.precision == "float64" else jp.float32
+        self._np_dtype = np.dtype(engine.precision)
         self._m = engine._model_on_device(model)
         d0 = mjx.put_data(model, mujoco.MjData(model))
         shapes = jax.eval_shape(lambda d: mjx.step(self._m, d), d0)  # as `MjxEngine.rollout`: the step's dtypes
@@ -518,30 +527,37 @@ class MjxWorlds(Worlds):
         self._t0, self._k = np.zeros(n), np.zeros(n, dtype=np.int64)
 
     def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
+        import jax
+        from mujoco import mjx
+
         self.qpos[ids], self.qvel[ids] = data.qpos, data.qvel
         self._t0[ids], self._k[ids] = data.time, 0
         self.time[ids] = data.time
-        jp = self._jp
-        self._d = self._d.replace(
-            qpos=jp.asarray(self.qpos, self._dtype),
-            qvel=jp.asarray(self.qvel, self._dtype),
-            time=jp.asarray(self.time, self._dtype),
-        )
+        self.ctrl[ids], self.qfrc_applied[ids], self.xfrc_applied[ids] = data.ctrl, data.qfrc_applied, data.xfrc_applied
+        # every field of those worlds (warm start, contacts, ...) from `data`, in the dtypes the step gives them
+        start = mjx.put_data(self.model, data)
+        self._d = jax.tree_util.tree_map(lambda x, x0: x.at[ids].set(self._jp.asarray(x0, x.dtype)), self._d, start)
 
     def step(self, nstep: int) -> None:
-        dtype = self._dtype
-        jp = self._jp
-        inputs = [jp.asarray(a, dtype) for a in (self.ctrl, self.qfrc_applied, self.xfrc_applied)]
-        self._d, qpos, qvel = _mjx_worlds_program(nstep)(self._m, self._d, *inputs)
-        self.qpos[:], self.qvel[:] = np.asarray(qpos), np.asarray(qvel)
+        # The inputs go to the jitted program as numpy arrays of its dtype (its dispatch copies them to the device in
+        # one go) and the state comes back as one array [qpos | qvel]: one transfer each way a step.
+        dtype = self._np_dtype
+        inputs = (self.ctrl.astype(dtype), self.qfrc_applied.astype(dtype), self.xfrc_applied.astype(dtype))
+        self._d, state = _mjx_worlds_program(nstep)(self._m, self._d, *inputs)
+        state = np.asarray(state)
+        nq = self.model.nq
+        self.qpos[:], self.qvel[:] = state[:, :nq], state[:, nq:]
         self._k += nstep
         self.time[:] = self._t0 + self.model.opt.timestep * self._k  # the step count is the clock (`clock`)
 
     def raw_step(self, nstep: int) -> None:
-        """The engine's bare batched step (no transfers): what `benchmarks/vector_envs.py` compares the env with."""
-        inputs = [self._jp.zeros(a.shape, self._dtype) for a in (self.ctrl, self.qfrc_applied, self.xfrc_applied)]
-        self._d, qpos, _ = _mjx_worlds_program(nstep)(self._m, self._d, *inputs)
-        qpos.block_until_ready()
+        """The engine's bare batched step: zero inputs already on the device, nothing copied back."""
+        if getattr(self, "_zeros", None) is None:
+            self._zeros = [
+                self._jp.zeros(a.shape, self._dtype) for a in (self.ctrl, self.qfrc_applied, self.xfrc_applied)
+            ]
+        self._d, state = _mjx_worlds_program(nstep)(self._m, self._d, *self._zeros)
+        state.block_until_ready()
 
 
 @functools.cache
@@ -555,7 +571,7 @@ def _mjx_worlds_program(nstep: int):
         def one(d, ctrl, qfrc, xfrc):
             d = d.replace(ctrl=ctrl, qfrc_applied=qfrc, xfrc_applied=xfrc)
             d = jax.lax.fori_loop(0, nstep, lambda _, d: mjx.step(m, d), d)
-            return d, d.qpos, d.qvel
+            return d, jax.numpy.concatenate([d.qpos, d.qvel])
 
         return jax.vmap(one)(d, ctrl, qfrc, xfrc)
 
@@ -567,9 +583,7 @@ class WarpWorlds(Worlds):
     `WarpEngine.rollout`), the inputs assigned before and qpos, qvel copied back after each launch."""
 
     def __init__(self, engine: WarpEngine, model: mujoco.MjModel, nworld: int) -> None:
-        import mujoco_warp as mjw
-        import warp as wp
-
+        wp, mjw = _warp()
         self.engine, self.model, self.nworld = engine, model, int(nworld)
         self._wp = wp
         with _WARP_LOCK, wp.ScopedDevice(engine.device):
@@ -582,15 +596,16 @@ class WarpWorlds(Worlds):
         self.qpos[ids], self.qvel[ids] = data.qpos, data.qvel
         self._t0[ids], self._k[ids] = data.time, 0
         self.time[ids] = data.time
+        self.ctrl[ids], self.qfrc_applied[ids], self.xfrc_applied[ids] = data.ctrl, data.qfrc_applied, data.xfrc_applied
         with _WARP_LOCK, self._wp.ScopedDevice(self.engine.device):
             self._d.qpos.assign(self.qpos.astype(np.float32))
             self._d.qvel.assign(self.qvel.astype(np.float32))
-            self._d.qacc_warmstart.zero_()
+            warmstart = self._d.qacc_warmstart.numpy()
+            warmstart[ids] = data.qacc_warmstart
+            self._d.qacc_warmstart.assign(warmstart)
 
     def _graph(self, nstep: int):
-        import mujoco_warp as mjw
-
-        wp = self._wp
+        wp, mjw = _warp()
         if nstep not in self._graphs:
             mjw.step(self._m, self._d)  # compile and load every kernel before capturing: one step, undone below
             qpos, qvel = self.qpos.astype(np.float32), self.qvel.astype(np.float32)

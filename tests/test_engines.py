@@ -179,3 +179,32 @@ def test_mjx_device_it_does_not_have_is_one_line(capsys):
     assert main(["run", "pendulum:one-radian", "--engine", "mjx", "--device", "cuda:7"]) == 2
     err = capsys.readouterr().err
     assert "engine mjx has no device 'cuda:7' here" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("name", ["warp", "mjx"])
+@pytest.mark.parametrize("vector_id", ["rigidbench/SimplePendulum-v0", "rigidbench/CoupledPendulums-v0"])
+def test_batched_vector_env_on_a_float32_engine_follows_c_within_its_floor(name, vector_id):
+    """A batched vector env on Warp or MJX (float32) against gymnasium's sync vector env of the same env on C
+    MuJoCo, with the same actions: every observation within the float32 round-off floor of the steps taken (the
+    random walk `roundoff_floor`, scale the observation's size, at least 1), and the same episode ends."""
+    pytest.importorskip({"warp": "mujoco_warp", "mjx": "mujoco.mjx"}[name])
+    import gymnasium as gym
+
+    n, calls = 3, 60
+    sync = gym.make_vec(vector_id, num_envs=n, vectorization_mode="sync")
+    batched = gym.make_vec(vector_id, num_envs=n, vectorization_mode="vector_entry_point", engine=name)
+    obs_c, _ = sync.reset(seed=0)
+    obs_e, _ = batched.reset(seed=0)
+    frame_skip = batched.unwrapped.env.frame_skip
+    rng = np.random.default_rng(0)
+    for k in range(1, calls + 1):
+        actions = rng.uniform(-0.5, 0.5, sync.action_space.shape) * sync.single_action_space.high
+        obs_c, _, term_c, trunc_c, _ = sync.step(actions)
+        obs_e, _, term_e, trunc_e, info = batched.step(actions)
+        floor, _ = roundoff_floor("float32", k * frame_skip, 1.0)
+        scale = np.maximum(np.abs(obs_c), 1.0)
+        assert np.all(np.abs(obs_e - obs_c) <= floor * scale), (k, obs_e - obs_c, floor)
+        assert np.array_equal(term_c, term_e) and np.array_equal(trunc_c, trunc_e)
+        assert np.all(np.isfinite(info["deviation"]))
+    sync.close()
+    batched.close()

@@ -139,3 +139,21 @@ def test_control_tasks_have_no_batched_vector_env():
     """The tasks draw targets and simulate baselines per copy: gymnasium's sync and async vector envs run them."""
     with pytest.raises(gym.error.Error, match="vector entry point"):
         gym.make_vec("rigidbench/CueShot-v0", num_envs=2, vectorization_mode="vector_entry_point")
+
+
+def test_batched_hooks_equal_the_per_copy_fallbacks():
+    """The array hooks of an env (here the planar blows: rotations, headings, wrapped angles) against
+    `ScenarioEnv`'s per-copy fallbacks, which run the single env's own hooks: the same bits."""
+    from rigidbench.envs.base import ScenarioEnv
+    from rigidbench.envs.vector import VectorScenarioEnv
+
+    fast_cls = env_classes()["rigidbench/PivotedStick-v0"]
+    hooks = ("_observations", "_apply_actions", "_measures", "_deviations")
+    plain_cls = type("PlainPivotedStick", (fast_cls,), {h: getattr(ScenarioEnv, h) for h in hooks})
+    fast, plain = VectorScenarioEnv(fast_cls, 3, frame_skip=50), VectorScenarioEnv(plain_cls, 3, frame_skip=50)
+    np.testing.assert_array_equal(fast.reset(seed=0)[0], plain.reset(seed=0)[0])
+    rng = np.random.default_rng(1)
+    for _ in range(80):
+        actions = rng.uniform(-1, 1, fast.action_space.shape) * fast.single_action_space.high
+        for a, b in zip(fast.step(actions)[:4], plain.step(actions)[:4], strict=True):
+            np.testing.assert_array_equal(a, b)
