@@ -910,16 +910,14 @@ def _dumps(doc: dict) -> str:
     return json.dumps(_jsonable(doc), indent=1) + "\n"
 
 
-# The signal that interrupted the command, if one did: the exception it raises may come out wrapped by the code it
-# landed in (ctypes, during `import mujoco`'s EGL probing, turns it into an ArgumentError).
-_SIGNALLED: list[int] = []
-
-
 def _raise_interrupted(signum: int, _frame: object) -> None:
-    from rigidbench.interrupt import Interrupted  # never rigidbench.runner: it may be half imported right now
+    # never rigidbench.runner: it may be half imported right now. The signal is noted first: the exception may come
+    # out wrapped by the code it landed in (ctypes, during `import mujoco`'s EGL probing, turns it into an
+    # ArgumentError) or be swallowed (`rigidbench.interrupt.check`).
+    from rigidbench import interrupt
 
-    _SIGNALLED.append(signum)
-    raise Interrupted(signum)
+    interrupt.note(signum)
+    raise interrupt.Interrupted(signum)
 
 
 def _write(args: argparse.Namespace, rows: list[dict], completion) -> None:
@@ -933,15 +931,17 @@ def _write(args: argparse.Namespace, rows: list[dict], completion) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     # Signals first: from here on SIGINT/SIGTERM end the command with one line and 130/143, planning included.
-    _SIGNALLED.clear()
+    from rigidbench import interrupt
+
+    interrupt.clear()
     handlers = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         return _main(argv)
     except BaseException as exc:  # noqa: BLE001 - sorted below: everything a user can cause is one line
         from rigidbench.interrupt import Interrupted
 
-        if not isinstance(exc, Interrupted) and _SIGNALLED:
-            exc = Interrupted(_SIGNALLED[0])  # raised inside code that wrapped it (e.g. ctypes' ArgumentError)
+        if not isinstance(exc, Interrupted) and interrupt.pending() is not None:
+            exc = Interrupted(interrupt.pending())  # raised inside code that wrapped it (e.g. ctypes' ArgumentError)
         if isinstance(exc, Interrupted):
             print(f"rigidbench: interrupted by {exc.name}", file=sys.stderr)
             return exc.status

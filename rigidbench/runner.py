@@ -21,7 +21,7 @@ from typing import Any
 
 import mujoco
 
-from rigidbench import registry
+from rigidbench import interrupt, registry
 from rigidbench.interrupt import Interrupted
 from rigidbench.params import Value
 from rigidbench.results import ERROR, UNSUPPORTED, rows_of
@@ -505,12 +505,18 @@ def run_jobs(
     done = dict(previous or {})
     todo = [job for job in jobs if job.key not in done]
     result = RunResult(list(jobs), done)
+    try:
+        interrupt.check()  # a signal swallowed while planning (during `import jax`, say): nothing is started
+    except Interrupted as exc:
+        result.interrupted = exc
+        return result
     batches = execute(todo, settings, progress=progress, workers=workers, executor=executor)
     try:
         for i, batch in batches:
             done[todo[i].key] = batch
             if journal_path:
                 journal.append(journal_path, todo[i].key, batch)
+            interrupt.check()  # a signal whose exception was swallowed where it landed stops the run here
     except Interrupted as exc:
         result.interrupted = exc
     finally:

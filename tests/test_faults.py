@@ -249,3 +249,20 @@ def test_many_more_faults(tmp_path, monkeypatch):
         directory = tmp_path / test.__name__
         directory.mkdir()
         test(directory)
+
+
+def test_a_signal_whose_exception_was_swallowed_stops_the_run_at_the_next_case(capsys):
+    """JAX's garbage-collection callback swallows an exception raised in it (a SIGTERM during `import jax` printed
+    "Exception ignored" and the run went on to the end, past `timeout`): the noted signal stops the run loop."""
+    from rigidbench import interrupt, runner
+    from rigidbench.settings import Settings
+
+    interrupt.clear()
+    interrupt.note(signal.SIGTERM)  # what the handler does before raising; its exception is taken to be lost
+    try:
+        jobs = runner.plan(["pendulum:one-radian", "pendulum:small-amplitude"], None, Settings())
+        result = runner.run_jobs(jobs, None)
+    finally:
+        interrupt.clear()
+    assert result.interrupted is not None and result.interrupted.status == 143
+    assert len(result.missing) == 2
