@@ -113,9 +113,9 @@ def main() -> None:
                     f"{row['batched_over_raw']:6.2f} {sync:8.0f} {row['batched_over_sync']:6.2f}",
                     flush=True,
                 )
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump({"mujoco": mujoco.__version__, "cpus": os.cpu_count(), "rows": rows}, fh, indent=1)
+                if args.json:  # after every row: a run cut short keeps what it measured
+                    with open(args.json, "w") as fh:
+                        json.dump({"mujoco": mujoco.__version__, "cpus": os.cpu_count(), "rows": rows}, fh, indent=1)
 
 
 if __name__ == "__main__":
