@@ -32,9 +32,30 @@ _CLI = _cli_starting()
 if _CLI:
     _early_signals()
 
-# MuJoCo picks its OpenGL backend when it is first imported: default to EGL on a machine with no display.
+
+
+def _headless_gl() -> str | None:
+    """The OpenGL backend MuJoCo can use without a display: EGL, else OSMesa, whichever library loads here; None
+    if neither does. MuJoCo's Python package imports the backend named by MUJOCO_GL with `import mujoco` itself,
+    and ``MUJOCO_GL=egl`` without libEGL makes that import fail (PyOpenGL: 'NoneType' object has no attribute
+    'eglQueryString'), so a machine without either keeps MuJoCo's default and renders nothing."""
+    import ctypes
+
+    for backend, names in (("egl", ("libEGL.so.1", "libEGL.so")), ("osmesa", ("libOSMesa.so.8", "libOSMesa.so"))):
+        for name in names:
+            try:
+                ctypes.CDLL(name)
+            except OSError:
+                continue
+            return backend
+    return None
+
+
+# MuJoCo picks its OpenGL backend when it is first imported: on a machine with no display, one that loads here.
 if "MUJOCO_GL" not in _os.environ and not _os.environ.get("DISPLAY"):
-    _os.environ["MUJOCO_GL"] = "egl"
+    _backend = _headless_gl()
+    if _backend is not None:
+        _os.environ["MUJOCO_GL"] = _backend
 
 __version__ = "0.1.0"
 

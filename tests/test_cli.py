@@ -113,3 +113,24 @@ def test_listing_the_scenarios_does_not_import_scipy():
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert proc.stdout.strip() == "[]", proc.stdout
+
+
+def test_headless_gl_is_one_that_loads_or_none(monkeypatch):
+    """MUJOCO_GL=egl on a machine without libEGL made `import mujoco` itself fail (seen on a GPU machine with no EGL
+    libraries): the backend is chosen only if its library loads, else MuJoCo keeps its default."""
+    import ctypes
+
+    import rigidbench
+
+    loads = set()
+
+    def cdll(name, *args, **kwargs):
+        if not any(name.startswith(lib) for lib in loads):
+            raise OSError(f"{name}: cannot open shared object file")
+
+    monkeypatch.setattr(ctypes, "CDLL", cdll)
+    assert rigidbench._headless_gl() is None
+    loads.add("libOSMesa")
+    assert rigidbench._headless_gl() == "osmesa"
+    loads.add("libEGL")
+    assert rigidbench._headless_gl() == "egl"
