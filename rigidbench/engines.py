@@ -515,9 +515,13 @@ class MjxWorlds(Worlds):
         d0 = mjx.put_data(model, mujoco.MjData(model))
         shapes = jax.eval_shape(lambda d: mjx.step(self._m, d), d0)  # as `MjxEngine.rollout`: the step's dtypes
         d0 = jax.tree_util.tree_map(lambda x, like: jp.asarray(x, like.dtype), d0, shapes)
-        self._d = jax.tree_util.tree_map(lambda x: jp.broadcast_to(x, (self.nworld, *x.shape)), d0)
+        self._device = next(iter(self._m.qpos0.devices()))  # where the model went (`MjxEngine._model_on_device`)
+        batched = jax.tree_util.tree_map(lambda x: jp.broadcast_to(x, (self.nworld, *x.shape)), d0)
+        self._d = jax.device_put(batched, self._device)
+        self._jax = jax
+        # A GPU's step writes the worlds' new state over the old (buffer donation); XLA on the CPU cannot, and warns.
+        self._program = _mjx_worlds_program(self._device.platform != "cpu")
         self._host_inputs()
-        self._steps = 0
 
     def _host_inputs(self) -> None:
         n, m = self.nworld, self.model
@@ -543,7 +547,7 @@ class MjxWorlds(Worlds):
         # one go) and the state comes back as one array [qpos | qvel]: one transfer each way a step.
         dtype = self._np_dtype
         inputs = (self.ctrl.astype(dtype), self.qfrc_applied.astype(dtype), self.xfrc_applied.astype(dtype))
-        self._d, state = _mjx_worlds_program(nstep)(self._m, self._d, *inputs)
+        self._d, state = self._program(self._m, self._d, *inputs, nstep=nstep)
         state = np.asarray(state)
         nq = self.model.nq
         self.qpos[:], self.qvel[:] = state[:, :nq], state[:, nq:]
@@ -553,21 +557,22 @@ class MjxWorlds(Worlds):
     def raw_step(self, nstep: int) -> None:
         """The engine's bare batched step: zero inputs already on the device, nothing copied back."""
         if getattr(self, "_zeros", None) is None:
-            self._zeros = [
-                self._jp.zeros(a.shape, self._dtype) for a in (self.ctrl, self.qfrc_applied, self.xfrc_applied)
-            ]
-        self._d, state = _mjx_worlds_program(nstep)(self._m, self._d, *self._zeros)
+            self._zeros = self._jax.device_put(
+                [np.zeros(a.shape, self._np_dtype) for a in (self.ctrl, self.qfrc_applied, self.xfrc_applied)],
+                self._device,
+            )
+        self._d, state = self._program(self._m, self._d, *self._zeros, nstep=nstep)
         state.block_until_ready()
 
 
 @functools.cache
-def _mjx_worlds_program(nstep: int):
-    """`nstep` MJX steps of every world with the given inputs, jitted once per step count (model and data are
-    arguments, as in `_mjx_program`)."""
+def _mjx_worlds_program(donate: bool):
+    """`nstep` MJX steps of every world with the given inputs, jitted once per step count (a static argument; model
+    and data are arguments, as in `_mjx_program`); with `donate` the old worlds' buffers hold the new ones."""
     import jax
     from mujoco import mjx
 
-    def run(m, d, ctrl, qfrc, xfrc):
+    def run(m, d, ctrl, qfrc, xfrc, nstep):
         def one(d, ctrl, qfrc, xfrc):
             d = d.replace(ctrl=ctrl, qfrc_applied=qfrc, xfrc_applied=xfrc)
             d = jax.lax.fori_loop(0, nstep, lambda _, d: mjx.step(m, d), d)
@@ -575,7 +580,7 @@ def _mjx_worlds_program(nstep: int):
 
         return jax.vmap(one)(d, ctrl, qfrc, xfrc)
 
-    return jax.jit(run)
+    return jax.jit(run, static_argnames="nstep", donate_argnums=(1,) if donate else ())
 
 
 class WarpWorlds(Worlds):
