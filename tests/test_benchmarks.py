@@ -50,3 +50,17 @@ def test_profile_summary_counts_samples_inside_env_step_by_line(tmp_path):
     total, lines = top_lines(raw)
     assert total == 100  # the reset's samples (its ODE solver's steps included) are outside env.step
     assert lines[0] == ("ScenarioEnv.step (base.py:149)", 70) and len(lines) == 3
+
+
+def test_vector_env_benchmark_runs_and_records_each_rate(tmp_path):
+    """benchmarks/vector_envs.py (issue 15's throughput table): raw engine, batched and sync rates, with ratios."""
+    out = tmp_path / "vector.json"
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "vector_envs.py"), "--envs", "SimplePendulum-v0", "--ns", "2",
+         "--rounds", "1", "--seconds", "0.05", "--json", str(out)],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    (row,) = json.loads(out.read_text())["rows"]
+    assert row["n"] == 2 and row["engine"] == "mujoco"
+    assert all(row[k] > 0 for k in ("raw", "batched", "sync", "batched_over_raw", "batched_over_sync"))
