@@ -952,6 +952,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         for sig, handler in handlers.items():
             signal.signal(sig, handler)
+        interrupt.clear()  # a later command (or runner call) in this process starts uninterrupted
 
 
 def _is_one_line(exc: BaseException) -> bool:

@@ -54,6 +54,5 @@ def test_a_signal_wrapped_by_the_code_it_landed_in_still_ends_in_one_line(monkey
             raise ctypes.ArgumentError(f"argument 1: {type(exc).__name__}: {exc}") from None
 
     monkeypatch.setattr(cli, "_main", parse)
-    monkeypatch.setattr(cli, "_SIGNALLED", [])
     assert cli.main(["list"]) == 130
     assert capsys.readouterr().err == "rigidbench: interrupted by SIGINT\n"
