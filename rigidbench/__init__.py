@@ -33,7 +33,6 @@ if _CLI:
     _early_signals()
 
 
-
 def _headless_gl() -> str | None:
     """The OpenGL backend MuJoCo can use without a display: EGL, else OSMesa, whichever library loads here; None
     if neither does. MuJoCo's Python package imports the backend named by MUJOCO_GL with `import mujoco` itself,
