@@ -6,8 +6,11 @@ sections, eqs 9.62 and 9.64, both branches for m1 > m2), in `rigidbench.analytic
 
 This is batch work: `n` independent collisions, each an initial state of the same two-sphere model, stepped
 together in C by `rigidbench.simulate.final_states` (`mujoco.rollout`, one MjData per thread, chunks of
-states); no Python loop per collision. Impact points are drawn by a numpy Generator seeded with `seed`, so a
-run is deterministic, and the result does not depend on the number of threads.
+states); no Python loop per collision. The beam is cut into blocks of `BLOCK` collisions, each drawn by its own
+numpy Generator seeded from `seed` and the block's index, simulated on its own and reduced to integer counts (a
+`Tally`: hits and the three angle histograms), which add up exactly. A run is deterministic, and its result does not
+depend on the number of threads, or on whether the blocks ran here or as shards on a Dask cluster
+(`rigidbench.shards`, ``--cluster``).
 
 There is no gymnasium env: a beam of independent collisions has no sequential decision to make, and one
 collision is what `rigidbench/HardSpheres-v0` offers.
@@ -15,20 +18,23 @@ collision is what `rigidbench/HardSpheres-v0` offers.
 
 from __future__ import annotations
 
+import hashlib
 import os
+import pickle
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import mujoco
 import numpy as np
 
+from rigidbench import shards
 from rigidbench.analytic import scattering
 from rigidbench.contact import MIN_STEPS
 from rigidbench.envs.hard_spheres import HardSpheres, stiffness_param
 from rigidbench.params import Bound, ContactSteps, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Scenario
-from rigidbench.simulate import final_states, initial_states
+from rigidbench.simulate import STATE, final_states, get_state, initial_states
 
 # Free flight before the contact (steps), so the kink of the force at entry falls on a step boundary.
 LEAD_STEPS = 2
@@ -45,6 +51,10 @@ BUDGET_STEPS = 20.0
 # that switches on or off mid-step: a first-order error. Measured (census, issue 13): 1.3e-3 at 4.2 steps per
 # contact, 1.1e-3 at 7.2, 5.4e-4 at 11.9, 5.3e-4 at 13.1, 2.6e-4 at 14.2; bounded by SWITCHING_BUDGET / steps.
 SWITCHING_BUDGET = 1e-2
+# Collisions per block of the beam (see the module's docstring): block 0 is drawn by default_rng(seed), so a beam of
+# n <= BLOCK is the single Generator's draw it always was; block j >= 1 by default_rng([seed, j]). A block is also
+# the unit of work of a cluster run (one shard each, ~3.5 s of one core at the reference settings).
+BLOCK = 10_000
 # Significance of the goodness-of-fit tests and the width of the cross-section band.
 ALPHA = 1e-3
 SIGMAS = 4.0
@@ -95,18 +105,51 @@ CHECKS = (
 _ALL = tuple(c.name for c in CHECKS)
 
 
+DISTRIBUTIONS = ("cm", "projectile", "target")
+
+
+@dataclass(frozen=True)
+class Tally:
+    """What a part of the beam leaves to measure: integer counts, which add up exactly over parts (`+`).
+
+    Attributes
+    ----------
+    collisions, hits, diverged : int
+        Collisions simulated, those whose target moved, those that diverged.
+    counts : dict of ndarray, shape (NBINS + 2,)
+        Per distribution (`DISTRIBUTIONS`: cos theta in the CM, psi and zeta in the LAB, over the hits): the
+        histogram over the test's bins (`distribution_bins`), then the count outside the bins and the count of
+        non-finite angles (`bin_counts`).
+    """
+
+    collisions: int
+    hits: int
+    diverged: int
+    counts: dict[str, np.ndarray] = field(compare=False)
+
+    def __add__(self, other: Tally) -> Tally:
+        return Tally(
+            self.collisions + other.collisions,
+            self.hits + other.hits,
+            self.diverged + other.diverged,
+            {k: self.counts[k] + other.counts[k] for k in DISTRIBUTIONS},
+        )
+
+
 @dataclass(frozen=True)
 class Beam:
-    """A simulated beam: the final state of every collision and its impact point.
+    """A simulated beam: its tally, and the final states of its first block (for plots and tests).
 
     Attributes
     ----------
     time : ndarray, shape (nstep + 1,)
         Sample times of one collision (s).
-    qpos, qvel : ndarray, shape (n, nq), (n, nv)
-        Final states.
-    impact : ndarray, shape (n,)
-        Impact parameters b (m).
+    tally : Tally
+        Counts over the whole beam.
+    qpos, qvel : ndarray, shape (m, nq), (m, nv)
+        Final states of the first block's m = min(n, BLOCK) collisions.
+    impact : ndarray, shape (m,)
+        Their impact parameters b (m).
     diverged_at : float or None
         The end time if any collision diverged, else None.
     diverged : int
@@ -114,11 +157,88 @@ class Beam:
     """
 
     time: np.ndarray
+    tally: Tally
     qpos: np.ndarray
     qvel: np.ndarray
     impact: np.ndarray
     diverged_at: float | None
     diverged: int
+
+
+@dataclass(frozen=True)
+class BeamShard:
+    """One block of a beam as a self-contained call (`tally_block`): the compiled model (which carries n, seed and
+    margin), the representative start state, the block, the steps, and the engine in effect."""
+
+    model: mujoco.MjModel
+    state: np.ndarray
+    block: int
+    nstep: int
+    nthread: int | None
+    engine: Any = None
+    keep: bool = False
+
+    def record(self) -> dict[str, Any]:
+        """What the call computes (a cluster keys it by a hash of this)."""
+        return {
+            "model": hashlib.sha1(pickle.dumps(self.model)).hexdigest(),
+            "state": hashlib.sha1(np.ascontiguousarray(self.state).tobytes()).hexdigest(),
+            "block": self.block,
+            "nstep": self.nstep,
+            "engine": self.engine.record() if self.engine is not None else None,
+            "keep": self.keep,
+        }
+
+
+def tally_block(shard: BeamShard) -> tuple[Tally, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
+    """Simulate one block of the beam and count it; with ``shard.keep`` also return its final qpos, qvel and impact
+    parameters. Runs anywhere: in this process, or on a cluster's worker (where the worker's threads step it)."""
+    from rigidbench import engines
+
+    model = shard.model
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, shard.state, STATE)
+    mujoco.mj_forward(model, data)
+    nthread = shard.nthread or _worker_threads() or os.cpu_count() or 1
+    with engines.use(shard.engine):
+        states0, impact = CrossSection.block(model, data, shard.block)
+        states, diverged = final_states(model, states0, shard.nstep, nthread=nthread)
+    qpos = states[:, 1 : 1 + model.nq]
+    qvel = states[:, 1 + model.nq : 1 + model.nq + model.nv]
+    return tally(model, qpos, qvel, diverged), ((qpos, qvel, impact) if shard.keep else None)
+
+
+def _worker_threads() -> int | None:
+    """The threads of the Dask worker running this call (None outside one)."""
+    try:
+        from distributed import get_worker
+
+        return int(get_worker().state.nthreads)
+    except (ImportError, ValueError, AttributeError):
+        return None
+
+
+def distribution_bins(model: mujoco.MjModel) -> dict[str, tuple[np.ndarray, float]]:
+    """Each distribution's test bins and slack (`goodness_of_fit`), from the model's masses and contact."""
+    m1, m2, _ = HardSpheres._geometry(model)
+    x = m1 / m2
+    psi_top = scattering.max_lab_angle(x) if x > 1 else (np.pi / 2 if x == 1 else np.pi)
+    steps = HardSpheres()._contact_time(model) / model.opt.timestep
+    return {
+        "cm": (np.linspace(-1.0, 1.0, NBINS + 1), 0.0),
+        "projectile": (np.linspace(0.0, psi_top, NBINS + 1), limit_slack(psi_top, x, steps)),
+        "target": (np.linspace(0.0, np.pi / 2, NBINS + 1), 0.0),
+    }
+
+
+def tally(model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray, diverged: np.ndarray) -> Tally:
+    """Count a batch of finished collisions (final states) into the tests' bins."""
+    out = HardSpheres().outgoing(model, qpos, qvel, np.array([1.0, 0.0, 0.0]))  # beam along +x
+    hit = np.linalg.norm(out["v2"], axis=1) > 0
+    samples = {"cm": np.cos(out["theta"][hit]), "projectile": out["psi"][hit], "target": out["zeta"][hit]}
+    bins = distribution_bins(model)
+    counts = {k: bin_counts(samples[k], *bins[k]) for k in DISTRIBUTIONS}
+    return Tally(len(qpos), int(np.count_nonzero(hit)), int(np.count_nonzero(diverged)), counts)
 
 
 # Fewest expected hits n / (1 + margin)^2 of a beam: the angle histograms need them for their goodness-of-fit.
@@ -136,6 +256,7 @@ class CrossSection(Scenario):
     env_id = None
     # Threads for the batch (None: one per CPU). Results do not depend on it.
     nthread: int | None = None
+    sharded = True  # the beam's blocks run as shards on a cluster (`rigidbench.shards`)
     # The pair's masses, radii, speed and contact are the hard-spheres scenario's parameters (one definition).
     params = (
         *(_HARD[name] for name in ("m1", "m2", "r1", "r2", "speed")),
@@ -232,66 +353,80 @@ class CrossSection(Scenario):
         # tests then fail.
         return 2 * LEAD_STEPS + int(np.ceil(1.15 * contact / model.opt.timestep))
 
-    def beam(self, model: mujoco.MjModel, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
-        """The beam's initial states and impact parameters, drawn from the model's seed.
+    @staticmethod
+    def blocks(model: mujoco.MjModel) -> int:
+        """The number of blocks of the model's beam (`BLOCK`)."""
+        return -(-int(model.numeric("samples").data[0]) // BLOCK)
+
+    @staticmethod
+    def block(model: mujoco.MjModel, data: mujoco.MjData, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """Block `j` of the beam: its initial states and impact parameters, drawn from the model's seed.
 
         Returns
         -------
-        states : ndarray, shape (n, nstate)
-        impact : ndarray, shape (n,)
+        states : ndarray, shape (m, nstate), m = min(BLOCK, n - j BLOCK)
+        impact : ndarray, shape (m,)
         """
         _, _, a = HardSpheres._geometry(model)
         n = int(model.numeric("samples").data[0])
+        count = min(BLOCK, n - j * BLOCK)
+        if not 0 <= j or count <= 0:
+            raise ValueError(f"block {j} is outside the beam's {CrossSection.blocks(model)} blocks")
         seed = int(model.numeric("seed").data[0])
         radius = a * (1 + float(model.numeric("margin").data[0]))
         speed = float(np.linalg.norm(HardSpheres._state(model, data.qpos, data.qvel)["v1"]))
-        rng = np.random.default_rng(seed)
-        impact = radius * np.sqrt(rng.random(n))  # uniform over the disc: P(b < r) = r^2 / R^2
-        azimuth = 2 * np.pi * rng.random(n)
-        qpos = np.repeat(data.qpos[None], n, axis=0)
-        qvel = np.repeat(data.qvel[None], n, axis=0)
+        rng = np.random.default_rng(seed if j == 0 else [seed, j])
+        impact = radius * np.sqrt(rng.random(count))  # uniform over the disc: P(b < r) = r^2 / R^2
+        azimuth = 2 * np.pi * rng.random(count)
+        qpos = np.repeat(data.qpos[None], count, axis=0)
+        qvel = np.repeat(data.qvel[None], count, axis=0)
         pos, vel = HardSpheres.place(a, impact, speed, LEAD_STEPS * model.opt.timestep, azimuth)
-        s = HardSpheres._state(model, qpos, qvel)
-        s["x1"][:], s["v1"][:] = pos, vel
+        st = HardSpheres._state(model, qpos, qvel)
+        st["x1"][:], st["v1"][:] = pos, vel
         return initial_states(model, data, qpos, qvel), impact
+
+    def beam(self, model: mujoco.MjModel, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
+        """The whole beam's initial states and impact parameters: its blocks in order (`block`)."""
+        parts = [self.block(model, data, j) for j in range(self.blocks(model))]
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
 
     def simulate(
         self, model: mujoco.MjModel, data: mujoco.MjData, duration: float, *, control: np.ndarray | None = None
     ) -> Beam:
-        states0, impact = self.beam(model, data)
+        from rigidbench import engines
+
         nstep = round(duration / model.opt.timestep)
-        nthread = self.nthread or os.cpu_count() or 1
-        states, diverged = final_states(model, states0, nstep, nthread=nthread)
-        qpos = states[:, 1 : 1 + model.nq]
-        qvel = states[:, 1 + model.nq : 1 + model.nq + model.nv]
+        state = get_state(model, data)
+        calls = [
+            (BeamShard(model, state, j, nstep, self.nthread, engines.current(), keep=j == 0),)
+            for j in range(self.blocks(model))
+        ]
+        total, first = None, None
+        for j, (part, kept) in shards.map(tally_block, calls):  # here, or as shards on a cluster (--cluster)
+            total = part if total is None else total + part
+            if j == 0:
+                first = kept
+        qpos, qvel, impact = first
         time = data.time + model.opt.timestep * np.arange(nstep + 1)
-        bad = int(diverged.sum())
-        return Beam(time, qpos, qvel, impact, float(time[-1]) if bad else None, bad)
+        bad = total.diverged
+        return Beam(time, total, qpos, qvel, impact, float(time[-1]) if bad else None, bad)
 
     def measure(self, model: mujoco.MjModel, traj: Beam, prediction: Mapping[str, Any]) -> dict[str, float]:
         a, x = prediction["_a"], prediction["_x"]
-        out = HardSpheres().outgoing(model, traj.qpos, traj.qvel, np.array([1.0, 0.0, 0.0]))  # beam along +x
-        hit = np.linalg.norm(out["v2"], axis=1) > 0
-        theta, psi, zeta = out["theta"][hit], out["psi"][hit], out["zeta"][hit]
-        n = len(traj.impact)
-        sigma = np.pi * prediction["_beam_radius"] ** 2 * np.count_nonzero(hit) / n
-        cos_edges = np.linspace(-1.0, 1.0, NBINS + 1)
+        t = traj.tally
+        sigma = np.pi * prediction["_beam_radius"] ** 2 * t.hits / t.collisions
+        bins = distribution_bins(model)
         # CM: sigma_CM = a^2/4 is uniform in solid angle, i.e. in cos(theta): equal probabilities.
-        p_cm = goodness_of_fit(np.cos(theta), cos_edges, np.full(NBINS, 1.0 / NBINS))
-        psi_top = scattering.max_lab_angle(x) if x > 1 else (np.pi / 2 if x == 1 else np.pi)
-        psi_edges = np.linspace(0.0, psi_top, NBINS + 1)
-        steps = HardSpheres()._contact_time(model) / model.opt.timestep
-        p_psi = goodness_of_fit(
-            psi, psi_edges, scattering.lab_angle_probabilities(psi_edges, a, x), slack=limit_slack(psi_top, x, steps)
-        )
-        zeta_edges = np.linspace(0.0, np.pi / 2, NBINS + 1)
-        p_zeta = goodness_of_fit(
-            zeta, zeta_edges, scattering.lab_angle_probabilities(zeta_edges, a, x, particle="target")
-        )
+        expected = {
+            "cm": np.full(NBINS, 1.0 / NBINS),
+            "projectile": scattering.lab_angle_probabilities(bins["projectile"][0], a, x),
+            "target": scattering.lab_angle_probabilities(bins["target"][0], a, x, particle="target"),
+        }
+        p = {k: chi_square_pvalue(t.counts[k], expected[k]) for k in DISTRIBUTIONS}
         return {
-            "cm-distribution-pvalue": p_cm,
-            "projectile-distribution-pvalue": p_psi,
-            "target-distribution-pvalue": p_zeta,
+            "cm-distribution-pvalue": p["cm"],
+            "projectile-distribution-pvalue": p["projectile"],
+            "target-distribution-pvalue": p["target"],
             "total-cross-section": float(sigma),
         }
 
@@ -319,12 +454,8 @@ def limit_slack(psi_limit: float, x: float, contact_steps: float = BUDGET_STEPS)
 
 
 def goodness_of_fit(samples: np.ndarray, edges: np.ndarray, probabilities: np.ndarray, *, slack: float = 0.0) -> float:
-    """p-value of Pearson's chi-square test of `samples` against bin `probabilities` (NaN if any sample is NaN).
-
-    Samples outside the edges count in the end bins' complement: they are added as one extra bin with its
-    expected probability 1 - sum(probabilities) (zero for a complete set of bins, so any sample outside fails).
-    Adjacent bins are merged until each expects at least `MIN_EXPECTED` samples. Samples at most `slack` above
-    the top edge (a kinematic limit passed by the integration error, `limit_slack`) count in the top bin.
+    """p-value of Pearson's chi-square test of `samples` against bin `probabilities` (NaN if any sample is NaN):
+    `chi_square_pvalue` of `bin_counts`.
 
     Parameters
     ----------
@@ -333,16 +464,42 @@ def goodness_of_fit(samples: np.ndarray, edges: np.ndarray, probabilities: np.nd
     probabilities : ndarray, shape (nbin,)
     slack : float
     """
+    return chi_square_pvalue(bin_counts(samples, edges, slack), probabilities)
+
+
+def bin_counts(samples: np.ndarray, edges: np.ndarray, slack: float = 0.0) -> np.ndarray:
+    """The counts a goodness-of-fit test needs, which add up over parts of a sample: the histogram over `edges`
+    (bins close on the right at the top edge, so a sample exactly at psi_max or pi/2 counts), then the number of
+    finite samples outside the edges, then the number of non-finite samples. Samples at most `slack` above the top
+    edge (a kinematic limit passed by the integration error, `limit_slack`) count in the top bin.
+
+    Returns
+    -------
+    ndarray of int64, shape (nbin + 2,)
+    """
     samples = np.asarray(samples, dtype=float)
-    if samples.size == 0 or not np.isfinite(samples).all():
-        return float("nan")
+    finite = samples[np.isfinite(samples)]
     top = edges[-1]
-    samples = np.where((samples > top) & (samples <= top + slack), top, samples)  # `slack`: see `limit_slack`
-    # Bins close on the right at the top edge, so a sample exactly at psi_max or pi/2 counts.
-    observed = np.histogram(samples, edges)[0].astype(float)
-    outside = samples.size - observed.sum()
-    expected = samples.size * np.asarray(probabilities, dtype=float)
-    rest = samples.size - expected.sum()
+    finite = np.where((finite > top) & (finite <= top + slack), top, finite)  # `slack`: see `limit_slack`
+    observed = np.histogram(finite, edges)[0].astype(np.int64)
+    return np.concatenate([observed, [finite.size - observed.sum(), samples.size - finite.size]])
+
+
+def chi_square_pvalue(counts: np.ndarray, probabilities: np.ndarray) -> float:
+    """p-value of Pearson's chi-square test of binned `counts` (`bin_counts`) against bin `probabilities`; NaN
+    for no samples or any non-finite one.
+
+    Samples outside the edges count in the end bins' complement: they are added as one extra bin with its
+    expected probability 1 - sum(probabilities) (zero for a complete set of bins, so any sample outside fails).
+    Adjacent bins are merged until each expects at least `MIN_EXPECTED` samples.
+    """
+    counts = np.asarray(counts)
+    observed, outside, nonfinite = counts[:-2].astype(float), float(counts[-2]), int(counts[-1])
+    size = observed.sum() + outside
+    if size == 0 or nonfinite:
+        return float("nan")
+    expected = size * np.asarray(probabilities, dtype=float)
+    rest = size - expected.sum()
     if outside > 0 and rest < MIN_EXPECTED:
         return 0.0  # samples where theory puts (almost) none
     obs, exp = [], []

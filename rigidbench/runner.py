@@ -21,7 +21,7 @@ from typing import Any
 
 import mujoco
 
-from rigidbench import interrupt, registry
+from rigidbench import interrupt, registry, shards
 from rigidbench.interrupt import Interrupted
 from rigidbench.params import Value
 from rigidbench.results import ERROR, UNSUPPORTED, rows_of
@@ -177,6 +177,8 @@ def run_job(job: Job, settings: Settings | None) -> list[dict[str, Any]]:
         return [unsupported_row(job, settings)]
     try:
         return rows_of(job.scenario.run(job.case, job.overrides, settings, perturb=job.perturb))
+    except ClusterError:  # a sharded case's cluster went away: the run stops, resumable (not this case's error)
+        raise
     except Exception as exc:  # noqa: BLE001 - recorded as a row, never swallowed
         return [error_row(job, settings, exc)]
 
@@ -452,11 +454,25 @@ def execute(
     workers. Closing the iterator early (an interrupt) cancels the cases not yet started.
     """
     executor = executor or Threads(workers)
-    for done, (i, rows) in enumerate(executor.map(run_job, [(job, settings) for job in jobs]), start=1):
+    # On a cluster a sharded case (a Monte Carlo batch, `Scenario.sharded`) runs here and maps its shards over the
+    # workers (`rigidbench.shards`); every other case is one call on a worker.
+    here = [i for i, job in enumerate(jobs) if isinstance(executor, Cluster) and job.scenario.sharded]
+    away = [i for i in range(len(jobs)) if i not in set(here)]
+    done = 0
+    for k, rows in executor.map(run_job, [(jobs[i], settings) for i in away]):
+        i = away[k]
         if isinstance(rows, BaseException):  # a job that failed on a cluster (e.g. killed its workers every time)
             rows = [error_row(jobs[i], settings, rows)]
         if progress is not None:
-            progress(done - 1, len(jobs), jobs[i])
+            progress(done, len(jobs), jobs[i])
+        done += 1
+        yield i, rows
+    for i in here:
+        with shards.use(executor.map):
+            rows = run_job(jobs[i], settings)
+        if progress is not None:
+            progress(done, len(jobs), jobs[i])
+        done += 1
         yield i, rows
 
 

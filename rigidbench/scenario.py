@@ -241,6 +241,9 @@ class Scenario:
         Conditions the theory needs beyond the parameter ranges (refused before simulating).
     env_id : str or None
         Gymnasium id, e.g. ``"rigidbench/HeavyTop-v0"``; None for a scenario with no stepping env.
+    sharded : bool
+        True where `simulate` maps independent shards through `rigidbench.shards.map` (a Monte Carlo batch): under
+        ``--cluster`` the runner runs such a case here and its shards on the workers.
     """
 
     slug: ClassVar[str]
@@ -250,6 +253,7 @@ class Scenario:
     checks: ClassVar[tuple[Check, ...]]
     domains: ClassVar[tuple[Domain, ...]] = ()
     env_id: ClassVar[str | None]
+    sharded: ClassVar[bool] = False
 
     # ---- hooks -------------------------------------------------------------------------------------------
 

@@ -198,3 +198,15 @@ def test_a_sweep_on_a_cluster_gives_the_rows_of_a_local_sweep(tmp_path):
     cluster = json.loads((tmp_path / "c.json").read_text())
     local = json.loads((tmp_path / "l.json").read_text())
     assert _stable(cluster["results"]) == _stable(local["results"]) and cluster["orders"] == local["orders"]
+
+
+def test_a_cross_section_sharded_over_a_local_cluster_gives_the_rows_of_a_local_run(tmp_path):
+    """A Monte Carlo beam of two blocks (10000 + 500 collisions) runs as two shards on two workers, its counts
+    merged in the client: the rows, p-values and total cross section included, are those of one process."""
+    target = ["run", "--quiet", "cross-section:equal-mass", "--set", "n=10500"]
+    assert cli.main([*target, "--cluster", "local:2", "--json", str(tmp_path / "c.json")]) == 0
+    assert cli.main([*target, "--json", str(tmp_path / "l.json")]) == 0
+    cluster = json.loads((tmp_path / "c.json").read_text())["results"]
+    local = json.loads((tmp_path / "l.json").read_text())["results"]
+    assert len(local) == 4 and all(r["passed"] for r in local)
+    assert _stable(cluster) == _stable(local)

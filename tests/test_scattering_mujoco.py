@@ -228,3 +228,81 @@ def test_lab_angles_just_past_psi_max_count_in_the_top_bin_but_no_further():
     assert goodness_of_fit(past, edges, probabilities, slack=slack) > 1e-3
     past[:30] = psi_max + 2 * slack
     assert goodness_of_fit(past, edges, probabilities, slack=slack) == 0.0
+
+
+# ---- the beam in blocks: shards that merge exactly (issue 17) ----------------------------------------------------
+
+
+def _small_blocks(monkeypatch, n=750, block=300, case="heavy-projectile"):
+    """A beam of `n` collisions cut into blocks of `block` (so that several blocks stay fast): model, data, nstep."""
+    from rigidbench.envs import cross_section
+
+    monkeypatch.setattr(cross_section, "BLOCK", block)
+    scenario = CrossSection()
+    model = scenario.build(scenario.resolve(scenario.case(case), {"n": n}))
+    data = scenario.start(model)
+    return scenario, model, data, scenario._nstep(model)
+
+
+def test_a_beam_of_at_most_one_block_is_the_single_generator_draw_it_always_was():
+    """Block 0 is drawn by default_rng(seed), so a beam of n <= BLOCK has the impact points (and hence the results)
+    it had before the beam was cut into blocks."""
+    from rigidbench.envs.cross_section import BLOCK
+
+    scenario = CrossSection()
+    model = scenario.build(scenario.resolve(scenario.case("equal-mass"), {"n": BLOCK}))
+    data = scenario.start(model)
+    _, b = scenario.beam(model, data)
+    _, _, a = HardSpheres._geometry(model)
+    seed = int(model.numeric("seed").data[0])
+    radius = a * (1 + float(model.numeric("margin").data[0]))
+    np.testing.assert_array_equal(b, radius * np.sqrt(np.random.default_rng(seed).random(BLOCK)))
+
+
+def test_block_tallies_add_up_exactly_to_the_tally_of_the_whole_beam_in_one_batch(monkeypatch):
+    """The merge is exact: n = 2.5 blocks stepped in one batch and counted once gives the same hits and histograms
+    as its blocks simulated and counted one by one (`tally_block`, as shards run) and added, and hence the same
+    p-values and total cross section."""
+    from rigidbench.envs.cross_section import Beam, BeamShard, Tally, tally, tally_block
+    from rigidbench.simulate import get_state
+
+    scenario, model, data, nstep = _small_blocks(monkeypatch)
+    assert scenario.blocks(model) == 3
+    states0, b = scenario.beam(model, data)
+    assert len(b) == 750 and len(np.unique(b)) == 750  # no block repeats another's draw
+    states, diverged = final_states(model, states0, nstep, nthread=2)
+    nq, nv = model.nq, model.nv
+    whole = tally(model, states[:, 1 : 1 + nq], states[:, 1 + nq : 1 + nq + nv], diverged)
+    parts = [tally_block(BeamShard(model, get_state(model, data), j, nstep, 1))[0] for j in range(3)]
+    assert [p.collisions for p in parts] == [300, 300, 150]
+    merged = parts[0] + parts[1] + parts[2]
+    assert merged == whole and whole.hits > 300 and whole.diverged == 0
+    for k in whole.counts:
+        np.testing.assert_array_equal(merged.counts[k], whole.counts[k])
+    prediction = scenario.predict(model, data)
+    beam = scenario.simulate(model, data, prediction["_duration"])  # the scenario's own path: shards, merged
+    assert isinstance(beam.tally, Tally) and beam.tally == whole
+    one_batch = Beam(beam.time, whole, beam.qpos, beam.qvel, beam.impact, None, 0)
+    assert scenario.measure(model, beam, prediction) == scenario.measure(model, one_batch, prediction)
+
+
+def test_the_result_does_not_depend_on_where_or_in_what_order_the_shards_run(monkeypatch):
+    """Shards mapped backwards, or on a pool of threads finishing in any order, give the measured values of shards
+    run here in turn, bit for bit."""
+    from rigidbench import shards
+    from rigidbench.runner import Threads
+
+    scenario, *_ = _small_blocks(monkeypatch, n=1000, block=250)
+
+    def backwards(fn, calls):
+        for i in reversed(range(len(calls))):
+            yield i, fn(*calls[i])
+
+    def measured(run):
+        return [(o.check.name, o.measured) for o in run.outcomes]
+
+    here = measured(scenario.run("heavy-projectile", {"n": 1000}))
+    with shards.use(backwards):
+        assert measured(scenario.run("heavy-projectile", {"n": 1000})) == here
+    with shards.use(Threads(3).map):
+        assert measured(scenario.run("heavy-projectile", {"n": 1000})) == here

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from rigidbench.analytic import scattering
-from rigidbench.envs.hard_spheres import HardSpheres
+from rigidbench.envs.cross_section import NBINS, distribution_bins
 from rigidbench.plots import THEORY_STYLE, Figure, PlotContext, measured_value, plot, settings_text, try_run
 
 # The deflection function's extra points, b / a, and the cases (mass ratios) that get them.
@@ -188,10 +188,11 @@ def hard_spheres(ctx: PlotContext) -> list[Figure]:
 # ---- the beam: cross sections (C5, C6) ---------------------------------------------------------------------------
 
 
-def _histogram(samples: np.ndarray, edges: np.ndarray, n: int, beam_area: float) -> tuple[np.ndarray, np.ndarray]:
-    """Differential cross section (m^2/sr) per bin from a beam of `n` collisions over `beam_area`, and its
-    Poisson standard error: sigma_beam (count / n) / (2 pi (cos lo - cos hi))."""
-    counts = np.histogram(samples, edges)[0].astype(float)
+def _histogram(counts: np.ndarray, edges: np.ndarray, n: int, beam_area: float) -> tuple[np.ndarray, np.ndarray]:
+    """Differential cross section (m^2/sr) per bin from the bin `counts` of a beam of `n` collisions over
+    `beam_area` (angle bins `edges`), and its Poisson standard error: sigma_beam (count / n) / (2 pi (cos lo - cos
+    hi))."""
+    counts = np.asarray(counts, dtype=float)
     solid = 2 * np.pi * (np.cos(edges[:-1]) - np.cos(edges[1:]))
     scale = beam_area / n / solid
     return counts * scale, np.sqrt(counts) * scale
@@ -203,22 +204,26 @@ def cross_section(ctx: PlotContext) -> list[Figure]:
     if not runs:
         return []
     fig, axes = ctx.subplots(len(runs), 3, figsize=(12.0, 3.1 * len(runs) + 0.4), squeeze=False)
-    nbin = 12
     for row, (case, run) in enumerate(runs):
         pred = run.prediction
         a, x, n = pred["_a"], pred["_x"], pred["_n"]
         beam_area = np.pi * pred["_beam_radius"] ** 2
         model = ctx.model(case)
-        beam = run.trajectory
-        angles = HardSpheres().outgoing(model, beam.qpos, beam.qvel, np.array([1.0, 0.0, 0.0]))
-        hit = np.linalg.norm(angles["v2"], axis=1) > 0
+        tally = run.trajectory.tally  # the counts the checks tested, over the whole beam
+        bins = distribution_bins(model)
         sigma = measured_value(run, "total-cross-section")
-        psi_top = scattering.max_lab_angle(x) if x > 1 else (np.pi / 2 if x == 1 else np.pi)
+        # The checks' bins: cos(theta) ascending is theta descending, so the CM counts are reversed.
+        cos_edges = bins["cm"][0]
+        counts = {
+            "theta": tally.counts["cm"][:NBINS][::-1],
+            "psi": tally.counts["projectile"][:NBINS],
+            "zeta": tally.counts["target"][:NBINS],
+        }
         panels = (
             (
                 "theta",
                 "CM angle theta",
-                np.arccos(np.linspace(1.0, -1.0, nbin + 1)),
+                np.arccos(cos_edges[::-1]),
                 "C5: a^2/4",
                 lambda t, a=a: np.full_like(t, a * a / 4),
                 "cm-distribution-pvalue",
@@ -226,7 +231,7 @@ def cross_section(ctx: PlotContext) -> list[Figure]:
             (
                 "psi",
                 "projectile LAB angle psi",
-                np.linspace(0.0, psi_top, nbin + 1),
+                bins["projectile"][0],
                 "C6: sum over branches (a^2/4)(x cos psi +- s)^2/s",
                 lambda p, a=a, x=x: scattering.lab_cross_section_projectile(p, a, x),
                 "projectile-distribution-pvalue",
@@ -234,7 +239,7 @@ def cross_section(ctx: PlotContext) -> list[Figure]:
             (
                 "zeta",
                 "target LAB angle zeta",
-                np.linspace(0.0, np.pi / 2, nbin + 1),
+                bins["target"][0],
                 "C6: a^2 cos(zeta)",
                 lambda z, a=a: scattering.lab_cross_section_target(z, a),
                 "target-distribution-pvalue",
@@ -242,7 +247,7 @@ def cross_section(ctx: PlotContext) -> list[Figure]:
         )
         for col, (key, name, edges, label, curve, check) in enumerate(panels):
             ax = axes[row, col]
-            value, err = _histogram(angles[key][hit], edges, n, beam_area)
+            value, err = _histogram(counts[key], edges, n, beam_area)
             mid = 0.5 * (edges[1:] + edges[:-1])
             fine = np.linspace(edges[0], edges[-1], 400)[1:-1]
             ax.plot(fine, curve(fine) * 1e4, label=label, **THEORY_STYLE)
@@ -261,7 +266,7 @@ def cross_section(ctx: PlotContext) -> list[Figure]:
                 ms=4,
                 mec="k",
                 capsize=2,
-                label=f"MuJoCo, {int(hit.sum())} hits of {n}",
+                label=f"MuJoCo, {tally.hits} hits of {n}",
             )
             ax.set_xlabel(f"{name} (rad)")
             reference = avg if key != "theta" else np.array([a * a / 4])
@@ -280,17 +285,17 @@ def cross_section(ctx: PlotContext) -> list[Figure]:
     return [
         Figure(
             "Cross sections: histograms of a uniform beam against C5 and C6",
-            "A beam of collisions with impact points uniform over a disc larger than the target (MuJoCo, batched), "
-            "one row per mass ratio. Each histogram is converted to a differential cross section (counts / n "
-            "times the beam area, over the bin's solid angle; error bars: Poisson). Left: the CM angle, isotropic "
-            "at a^2/4 (THEORY.md C5). Middle: the projectile's LAB angle against C6's sum over branches (a^2 "
-            "cos(psi) for equal masses, one branch over [0, pi] for a light projectile, two branches piling up "
-            "below psi_max with an integrable singularity for a heavy one; dashed: the theory's bin averages, "
-            "what the histogram estimates). Right: the target's recoil, a^2 cos(zeta) for every mass ratio. "
-            "The beams of the three rows share their seed, hence their impact points: the CM and recoil angles do "
-            "not depend on the masses, so those histograms repeat row to row. "
-            "Agreement: the points within their error bars of the curves (the titles give the chi-square "
-            "p-values of the checks), and the total cross section close to pi a^2.",
+            "A beam of collisions with impact points uniform over a disc larger than the target (MuJoCo, batched), one "
+            "row per mass ratio. Each histogram (the checks' own bins and counts over the whole beam) is converted "
+            "to a differential cross section (counts / n times the beam area, over the bin's solid angle; error bars: "
+            "Poisson). Left: the CM angle, isotropic at a^2/4 (THEORY.md C5). Middle: the projectile's LAB angle "
+            "against C6's sum over branches (a^2 cos(psi) for equal masses, one branch over [0, pi] for a light "
+            "projectile, two branches piling up below psi_max with an integrable singularity for a heavy one; dashed: "
+            "the theory's bin averages, what the histogram estimates). Right: the target's recoil, a^2 cos(zeta) for "
+            "every mass ratio. The beams of the three rows share their seed, hence their impact points: the CM and "
+            "recoil angles do not depend on the masses, so those histograms repeat row to row. Agreement: the points "
+            "within their error bars of the curves (the titles give the chi-square p-values of the checks), and the "
+            "total cross section close to pi a^2.",
             fig,
         )
     ]
