@@ -85,7 +85,7 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.metadata = {**self.env.metadata, "autoreset_mode": AutoresetMode.NEXT_STEP}
         self.render_mode = None
-        self._worlds: dict[int, engines.Worlds] = {}  # by id of the template's model
+        self.worlds: engines.Worlds | None = None  # the batch of the template's current model
         self._options: dict[str, Any] = {}
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._k = np.zeros(self.num_envs, dtype=np.int64)
@@ -98,12 +98,10 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         """Reset the template for the batch's configuration; its state, theory table and reset info."""
         env = self.env
         obs, info = env.reset(seed=seed, options=self._options)
-        model = env.model
-        if id(model) not in self._worlds:
-            for worlds in self._worlds.values():
-                worlds.close()
-            self._worlds = {id(model): engines.worlds(self._engine, model, self.num_envs, nthread=self._nthread)}
-        self.worlds = self._worlds[id(model)]
+        if self.worlds is None or self.worlds.model is not env.model:  # a new case or parameters: a new batch
+            if self.worlds is not None:
+                self.worlds.close()
+            self.worlds = engines.worlds(self._engine, env.model, self.num_envs, nthread=self._nthread)
         self._table = np.array(env._rows, dtype=float)
         self._obs0, self._info0 = obs, info
         self._data0 = copy.copy(env.data)  # the episode's initial state, for every copy's (auto)reset
@@ -220,9 +218,9 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         _put(infos, self._info0, ids, self.num_envs)
 
     def close_extras(self, **kwargs) -> None:
-        for worlds in self._worlds.values():
-            worlds.close()
-        self._worlds = {}
+        if self.worlds is not None:
+            self.worlds.close()
+            self.worlds = None
         self.env.close()
 
 
