@@ -11,7 +11,9 @@ Any other warning is an error here, and each of the two must appear exactly wher
 
 import functools
 import math
+import sys
 import warnings
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -115,3 +117,26 @@ def test_a_short_ppo_run_on_cue_shot_learns_with_finite_rewards():
     action, _ = model.predict(venv.reset(), deterministic=True)
     assert venv.action_space.contains(action[0].astype(np.float64))
     assert all(math.isfinite(v) for v in model.logger.name_to_value.values())
+
+
+def test_rl_baselines_scores_the_theory_policy_near_zero_regret_and_prints_every_method():
+    """benchmarks/rl_baselines.py's scoring, cheaply (its full run is a documented command, ~10 min): the theory
+    policy through the [-1, 1] rescaling is the theory's own action (regret 0 on the closed-loop top, by
+    construction), and the table has a cell for every method."""
+    root = Path(__file__).resolve().parents[1]
+    sys.path.insert(0, str(root / "benchmarks"))
+    try:
+        import rl_baselines
+    finally:
+        sys.path.pop(0)
+    top = rl_baselines.evaluate("rigidbench/TopPrecession-v0", rl_baselines._theory, episodes=1)
+    assert abs(top["regret"]) < 1e-9 and top["return"] < 0  # a sum of 1000 exact zeros' rounding
+    cue = rl_baselines.evaluate("rigidbench/CueShot-v0", rl_baselines._theory, episodes=2)
+    assert 0 <= cue["regret"] < 1e-5  # the theory's measured regret (docs/gymnasium.md: 4.9e-8; bound 1e-5)
+    rows = [
+        {"task": t, "method": m, "regret": 1.0, "return": -1.0}
+        for t in rl_baselines.TASKS
+        for m in rl_baselines.METHODS
+    ]
+    table = rl_baselines.markdown(rows)
+    assert table.count("\n") == len(rl_baselines.TASKS) + 1 and table.count("1 (-1)") == 25
