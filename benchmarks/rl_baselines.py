@@ -20,8 +20,14 @@ one-shot tasks, against the baseline simulated from the same initial state for t
 torch runs on the CPU with one thread (``torch.set_num_threads(1)``): the networks are SB3's small MLPs, and the
 machine this was measured on has two cores shared with other work.
 
-Usage: ``python benchmarks/rl_baselines.py [--json PATH] [--quick]`` (needs the `rl` extra: docs/gymnasium.md);
-``--quick`` cuts every budget and evaluation tenfold, to check that the script runs, not to report.
+Learning curves: ``--curves PATH.png`` also scores PPO and SAC on the same held-out episodes at `CHECKPOINTS`
+evenly spaced points of their training (and before it) and plots mean regret against env steps, with the random,
+theory and CEM levels (needs matplotlib, the `report` extra). The evaluations use their own envs and deterministic
+actions, so the training, and the final row, are the same with or without them.
+
+Usage: ``python benchmarks/rl_baselines.py [--json PATH] [--curves PATH.png] [--quick]`` (needs the `rl` extra:
+docs/gymnasium.md); ``--quick`` cuts every budget and evaluation tenfold, to check that the script runs, not to
+report.
 """
 
 from __future__ import annotations
@@ -40,6 +46,7 @@ import gymnasium as gym
 import numpy as np
 import torch
 from stable_baselines3 import PPO, SAC
+from stable_baselines3.common.callbacks import BaseCallback
 
 import rigidbench
 from rigidbench.envs.task import ShotTask
@@ -62,6 +69,7 @@ EVAL_SEED = 10_000
 TRAIN_SEED = 0
 CEM = {"iterations": 4, "population": 12}  # 50 simulated shots per target, with the final two evaluations
 METHODS = ("theory", "random", "PPO", "SAC", "CEM")
+CHECKPOINTS = 8  # learning-curve points after the start (--curves)
 
 
 def _cem_module():
@@ -116,14 +124,37 @@ def _random(env: gym.Env, _obs, _i) -> np.ndarray:
     return env.action_space.sample()
 
 
-def _learner(env_id: str, algo: str, budget: int):
+class _Curve(BaseCallback):
+    """Scores the model on the held-out episodes at the start and every `budget // CHECKPOINTS` env steps."""
+
+    def __init__(self, env_id: str, budget: int, episodes: int) -> None:
+        super().__init__()
+        self.env_id, self.budget, self.episodes = env_id, budget, episodes
+        self.every = max(1, budget // CHECKPOINTS)
+        self.points: list[tuple[int, float]] = []
+
+    def _score(self) -> None:
+        policy = lambda _env, obs, _i: self.model.predict(obs, deterministic=True)[0]  # noqa: E731
+        self.points.append((self.num_timesteps, evaluate(self.env_id, policy, self.episodes)["regret"]))
+
+    def _on_training_start(self) -> None:
+        self._score()
+
+    def _on_step(self) -> bool:
+        # the point at the end of training is the final evaluation (`run`), after the last update
+        if self.every * len(self.points) <= self.num_timesteps < self.budget:
+            self._score()
+        return True
+
+
+def _learner(env_id: str, algo: str, budget: int, curve: _Curve | None = None):
     env = make_env(env_id)
     kwargs = {}
     if algo == "PPO" and issubclass(type(env.unwrapped), ShotTask):
         kwargs = {"n_steps": 64, "batch_size": 32}
     cls = {"PPO": PPO, "SAC": SAC}[algo]
     model = cls("MlpPolicy", env, seed=TRAIN_SEED, device="cpu", **kwargs)
-    model.learn(total_timesteps=budget)
+    model.learn(total_timesteps=budget, callback=curve)
     env.close()
     # PPO finishes its last rollout: 10 240 steps for a budget of 10 000 at the default n_steps = 2048
     return (lambda _env, obs, _i: model.predict(obs, deterministic=True)[0]), model.num_timesteps
@@ -141,8 +172,9 @@ def _cem_policy(env_id: str, episodes: int, cem, settings: dict) -> Callable:
     return lambda _env, _obs, i: actions[i]
 
 
-def run(quick: bool = False) -> list[dict]:
-    """One row per (task, method): mean regret and return over the held-out episodes, budget and wall time."""
+def run(quick: bool = False, curves: bool = False) -> list[dict]:
+    """One row per (task, method): mean regret and return over the held-out episodes, budget and wall time (and,
+    with `curves`, the learners' ``curve``: (env steps, mean regret) pairs)."""
     scale = 10 if quick else 1
     cem = _cem_module()
     rows = []
@@ -165,13 +197,38 @@ def run(quick: bool = False) -> list[dict]:
                 evaluations = settings["iterations"] * settings["population"] + 2
                 steps = evaluations * episodes
             else:
-                policy, steps = _learner(env_id, method, budget)
+                curve = _Curve(env_id, budget, episodes) if curves else None
+                policy, steps = _learner(env_id, method, budget, curve)
             result = evaluate(env_id, policy, episodes)
             rows.append(
                 {"task": env_id, "method": method, **result, "budget": steps, "wall_s": time.perf_counter() - start}
             )
+            if method in ("PPO", "SAC") and curves:
+                rows[-1]["curve"] = [*curve.points, (steps, result["regret"])]
             print(f"{env_id} {method}: {rows[-1]}", file=sys.stderr, flush=True)
     return rows
+
+
+def plot_curves(rows: list[dict], path: Path) -> None:
+    """Mean held-out regret against env steps of training, one panel per task, with the fixed policies' levels."""
+    from rigidbench.plots import pyplot
+
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(TASKS), figsize=(4 * len(TASKS), 3.4), layout="constrained")
+    for ax, env_id in zip(axes, TASKS, strict=True):
+        by = {r["method"]: r for r in rows if r["task"] == env_id}
+        for method, style in (("PPO", "o-"), ("SAC", "s-")):
+            steps, regret = np.array(by[method]["curve"], dtype=float).T
+            ax.plot(steps, regret, style, ms=3, label=method)
+        for method, colour in (("random", "grey"), ("theory", "black"), ("CEM", "tab:green")):
+            if by[method]["regret"] is not None:
+                ax.axhline(by[method]["regret"], color=colour, ls="--", lw=1, label=method)
+        ax.set_title(env_id.split("/")[1], fontsize=10)
+        ax.set_xlabel("env steps of training")
+    axes[0].set_ylabel("mean regret, held-out episodes")
+    axes[0].legend(fontsize=8)
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
 
 
 def _cell(row: dict) -> str:
@@ -192,13 +249,16 @@ def markdown(rows: list[dict]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path, help="write the rows and the run's settings here")
+    parser.add_argument("--curves", type=Path, help="plot the learning curves into this PNG (needs matplotlib)")
     parser.add_argument("--quick", action="store_true", help="budgets and evaluations / 10: a smoke run")
     args = parser.parse_args()
     torch.set_num_threads(1)
     start = time.perf_counter()
-    rows = run(quick=args.quick)
+    rows = run(quick=args.quick, curves=args.curves is not None)
     wall = time.perf_counter() - start
     print(markdown(rows))
+    if args.curves:
+        plot_curves(rows, args.curves)
     import mujoco
     import stable_baselines3
 
