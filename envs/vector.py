@@ -221,6 +221,7 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         if self.worlds is not None:
             self.worlds.close()
             self.worlds = None
+        self._ready = False  # a step after close asks for a reset, which builds the batch again
         self.env.close()
 
 
