@@ -498,9 +498,32 @@ class CWorlds(Worlds):
         self._batch.step(nstep=nstep)
 
 
-class MjxWorlds(Worlds):
-    """MJX: the worlds as one vmapped `mjx.Data` on the engine's device, `nstep` steps a jitted `lax.scan` (compiled
-    once per model structure, world count and step count); the inputs go up and qpos, qvel come down each step."""
+class HostWorlds(Worlds):
+    """Worlds an engine keeps on its device (MJX, Warp): float64 host copies of what the envs read and write, the
+    state of the loaded worlds written into them by `_load_host`, and the step count as the clock (`clock`)."""
+
+    def _host_arrays(self) -> None:
+        n, m = self.nworld, self.model
+        self.qpos, self.qvel = np.zeros((n, m.nq)), np.zeros((n, m.nv))
+        self.time, self.ctrl = np.zeros(n), np.zeros((n, m.nu))
+        self.qfrc_applied, self.xfrc_applied = np.zeros((n, m.nv)), np.zeros((n, m.nbody, 6))
+        self._t0, self._k = np.zeros(n), np.zeros(n, dtype=np.int64)
+
+    def _load_host(self, ids: np.ndarray, data: mujoco.MjData) -> None:
+        self.qpos[ids], self.qvel[ids] = data.qpos, data.qvel
+        self._t0[ids], self._k[ids] = data.time, 0
+        self.time[ids] = data.time
+        self.ctrl[ids], self.qfrc_applied[ids], self.xfrc_applied[ids] = data.ctrl, data.qfrc_applied, data.xfrc_applied
+
+    def _tick(self, nstep: int) -> None:
+        self._k += nstep
+        self.time[:] = self._t0 + self.model.opt.timestep * self._k  # not the engine's float32 time: see `clock`
+
+
+class MjxWorlds(HostWorlds):
+    """MJX: the worlds as one vmapped `mjx.Data` on the engine's device, `nstep` steps one jitted `fori_loop`
+    (compiled once per model structure, world count and step count); the inputs go up and qpos, qvel come down each
+    step."""
 
     def __init__(self, engine: MjxEngine, model: mujoco.MjModel, nworld: int) -> None:
         jax = engine._jax()
@@ -521,23 +544,13 @@ class MjxWorlds(Worlds):
         self._jax = jax
         # A GPU's step writes the worlds' new state over the old (buffer donation); XLA on the CPU cannot, and warns.
         self._program = _mjx_worlds_program(self._device.platform != "cpu")
-        self._host_inputs()
-
-    def _host_inputs(self) -> None:
-        n, m = self.nworld, self.model
-        self.qpos, self.qvel = np.zeros((n, m.nq)), np.zeros((n, m.nv))
-        self.time, self.ctrl = np.zeros(n), np.zeros((n, m.nu))
-        self.qfrc_applied, self.xfrc_applied = np.zeros((n, m.nv)), np.zeros((n, m.nbody, 6))
-        self._t0, self._k = np.zeros(n), np.zeros(n, dtype=np.int64)
+        self._host_arrays()
 
     def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
         import jax
         from mujoco import mjx
 
-        self.qpos[ids], self.qvel[ids] = data.qpos, data.qvel
-        self._t0[ids], self._k[ids] = data.time, 0
-        self.time[ids] = data.time
-        self.ctrl[ids], self.qfrc_applied[ids], self.xfrc_applied[ids] = data.ctrl, data.qfrc_applied, data.xfrc_applied
+        self._load_host(ids, data)
         # every field of those worlds (warm start, contacts, ...) from `data`, in the dtypes the step gives them
         start = mjx.put_data(self.model, data)
         self._d = jax.tree_util.tree_map(lambda x, x0: x.at[ids].set(self._jp.asarray(x0, x.dtype)), self._d, start)
@@ -551,8 +564,7 @@ class MjxWorlds(Worlds):
         state = np.asarray(state)
         nq = self.model.nq
         self.qpos[:], self.qvel[:] = state[:, :nq], state[:, nq:]
-        self._k += nstep
-        self.time[:] = self._t0 + self.model.opt.timestep * self._k  # the step count is the clock (`clock`)
+        self._tick(nstep)
 
     def raw_step(self, nstep: int) -> None:
         """The engine's bare batched step: zero inputs already on the device, nothing copied back."""
@@ -583,7 +595,7 @@ def _mjx_worlds_program(donate: bool):
     return jax.jit(run, static_argnames="nstep", donate_argnums=(1,) if donate else ())
 
 
-class WarpWorlds(Worlds):
+class WarpWorlds(HostWorlds):
     """MuJoCo Warp: one `mjw.Data` of `nworld` worlds; `nstep` steps captured once as a Warp graph (as in
     `WarpEngine.rollout`), the inputs assigned before and qpos, qvel copied back after each launch."""
 
@@ -594,14 +606,11 @@ class WarpWorlds(Worlds):
         with _WARP_LOCK, wp.ScopedDevice(engine.device):
             self._m = engine._model_on_device(model)
             self._d = mjw.put_data(model, mujoco.MjData(model), nworld=self.nworld)
-        MjxWorlds._host_inputs(self)
+        self._host_arrays()
         self._graphs: dict[int, Any] = {}
 
     def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
-        self.qpos[ids], self.qvel[ids] = data.qpos, data.qvel
-        self._t0[ids], self._k[ids] = data.time, 0
-        self.time[ids] = data.time
-        self.ctrl[ids], self.qfrc_applied[ids], self.xfrc_applied[ids] = data.ctrl, data.qfrc_applied, data.xfrc_applied
+        self._load_host(ids, data)
         with _WARP_LOCK, self._wp.ScopedDevice(self.engine.device):
             self._d.qpos.assign(self.qpos.astype(np.float32))
             self._d.qvel.assign(self.qvel.astype(np.float32))
@@ -612,10 +621,11 @@ class WarpWorlds(Worlds):
     def _graph(self, nstep: int):
         wp, mjw = _warp()
         if nstep not in self._graphs:
+            warmstart = self._d.qacc_warmstart.numpy()
             mjw.step(self._m, self._d)  # compile and load every kernel before capturing: one step, undone below
-            qpos, qvel = self.qpos.astype(np.float32), self.qvel.astype(np.float32)
-            self._d.qpos.assign(qpos)
-            self._d.qvel.assign(qvel)
+            self._d.qpos.assign(self.qpos.astype(np.float32))
+            self._d.qvel.assign(self.qvel.astype(np.float32))
+            self._d.qacc_warmstart.assign(warmstart)
             with wp.ScopedCapture(force_module_load=False) as capture:
                 for _ in range(nstep):
                     mjw.step(self._m, self._d)
@@ -630,8 +640,7 @@ class WarpWorlds(Worlds):
             self._d.xfrc_applied.assign(self.xfrc_applied.astype(np.float32))
             wp.capture_launch(self._graph(nstep))
             self.qpos[:], self.qvel[:] = self._d.qpos.numpy(), self._d.qvel.numpy()
-        self._k += nstep
-        self.time[:] = self._t0 + self.model.opt.timestep * self._k
+        self._tick(nstep)
 
     def raw_step(self, nstep: int) -> None:
         """The engine's bare batched step (a graph launch, no transfers)."""
