@@ -9,8 +9,8 @@ one-shot tasks, against the baseline simulated from the same initial state for t
 * **PPO**: SB3's defaults, except ``n_steps=64, batch_size=32`` on the one-shot tasks, where the default rollout
   of 2048 steps is four times the budget and would leave PPO without a single update (the budget gives it 8).
 * **SAC**: SB3's defaults.
-* Both see the action rescaled to [-1, 1] (``gymnasium.wrappers.RescaleAction``) where the env's action is an SI
-  torque (TopPrecession, PendulumEnergyTransfer), as SB3 recommends; the one-shot tasks' actions already are.
+* Both see the env's own action space: float32, normalised to [-1, 1] (the closed-loop tasks' torque is
+  ``action_scale`` times it), as SB3 recommends; no wrapper.
 * **CEM** (`examples/cem_shots.py`, imported, not copied): one-shot tasks only. It is a search per target, not a
   policy: for each evaluation episode it searches that episode's target (4 generations of 12 + 2 = 50 simulated
   shots each, about the learners' budget over the 10 targets) and is scored on its final mean. It gets what the
@@ -81,14 +81,9 @@ def _cem_module():
     return module
 
 
-def _is_unit_box(space: gym.spaces.Box) -> bool:
-    return bool(np.all(space.low == -1.0) and np.all(space.high == 1.0))
-
-
 def make_env(env_id: str) -> gym.Env:
-    """The env as the learners see it: the action rescaled to [-1, 1] where it is an SI quantity."""
-    env = gym.make(env_id)
-    return env if _is_unit_box(env.action_space) else gym.wrappers.RescaleAction(env, -1.0, 1.0)
+    """The env as the learners see it: as registered (its action is normalised already)."""
+    return gym.make(env_id)
 
 
 def evaluate(env_id: str, act: Callable[[gym.Env, np.ndarray, int], np.ndarray], episodes: int) -> dict:
@@ -113,11 +108,7 @@ def evaluate(env_id: str, act: Callable[[gym.Env, np.ndarray, int], np.ndarray],
 
 
 def _theory(env: gym.Env, _obs, _i) -> np.ndarray:
-    action = env.unwrapped.theory_action()
-    if isinstance(env, gym.wrappers.RescaleAction):  # back to [-1, 1]: the wrapper maps it to the theory's torque
-        low, high = env.unwrapped.action_space.low, env.unwrapped.action_space.high
-        action = 2.0 * (action - low) / (high - low) - 1.0
-    return action
+    return env.unwrapped.theory_action()
 
 
 def _random(env: gym.Env, _obs, _i) -> np.ndarray:

@@ -95,12 +95,20 @@ class ScenarioEnv(gym.Env):
         self._renderer: mujoco.Renderer | None = None
         self._load(self._case_name, self._params)
         self.observation_space = self._observation_space()
-        self.action_space = self._action_space()
         if len(self.observation_space.shape) != 1:
             raise TypeError(f"{type(self).__name__}: observations must be 1-D, not {self.observation_space.shape}")
+        # The action an agent sends is normalised, float32 in [-1, 1] per component (gymnasium's MuJoCo envs and
+        # SB3's convention, issue 17); the env's physical action (SI) is that times `action_scale`, the bound
+        # `_action_space` states in SI units. The hooks see the physical action only.
+        physical = self._action_space()
+        if not np.array_equal(physical.low, -physical.high) or not np.all(physical.high > 0):
+            raise TypeError(
+                f"{type(self).__name__}: the physical action bounds must be symmetric, +-high with high > 0"
+            )
+        self.action_scale = np.array(physical.high, dtype=np.float64)  # SI units of one unit of action
+        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=physical.shape, dtype=np.float32)
         self._action_shape = self.action_space.shape
-        self._action_low = self.action_space.low.tolist()
-        self._action_high = self.action_space.high.tolist()
+        self._unit_scale = bool(np.all(self.action_scale == 1.0))  # a unit box: the physical action is the action
 
     # ---- the MjData and the views into it ---------------------------------------------------------------
 
@@ -276,7 +284,7 @@ class ScenarioEnv(gym.Env):
         return obs, reward, True, False, info
 
     def _checked_action(self, action) -> np.ndarray:
-        """`action` as float64 of the action space's shape, clipped to it.
+        """The physical action (float64, SI) of a normalised `action`: clipped to [-1, 1], times `action_scale`.
 
         Raises
         ------
@@ -287,23 +295,26 @@ class ScenarioEnv(gym.Env):
             action = np.asarray(action, dtype=np.float64)
         if action.shape != self._action_shape:
             raise ValueError(f"action shape {action.shape} != {self._action_shape}")
-        # Fast path: every component inside [low, high] (NaN fails the comparison and takes the slow path). A
-        # loop, not all(...), and no zip(strict=): each costs ~0.3 us a step; the shape was checked above. One
-        # component (the pendulums' torque) needs no loop at all.
-        values = action.tolist()
-        if len(values) == 1:
-            if self._action_low[0] <= values[0] <= self._action_high[0]:
-                return action
-        else:
-            for lo, v, hi in zip(self._action_low, values, self._action_high):  # noqa: B905
-                if not lo <= v <= hi:
-                    break
-            else:
-                return action
-        if not np.isfinite(action).all():
-            raise ValueError(f"action {action} is not finite")
-        # Out-of-range actions are clipped to the action space (gymnasium's MuJoCo convention).
-        return np.clip(action, self.action_space.low, self.action_space.high)
+        # Fast path: every component inside [-1, 1] (NaN fails the comparison and takes the slow path). A loop,
+        # not all(...): each costs ~0.3 us a step; the shape was checked above.
+        for v in action.tolist():
+            if not -1.0 <= v <= 1.0:
+                if not np.isfinite(action).all():
+                    raise ValueError(f"action {action} is not finite")
+                # Out-of-range actions are clipped to the action space (gymnasium's MuJoCo convention).
+                action = np.clip(action, -1.0, 1.0)
+                break
+        return action if self._unit_scale else action * self.action_scale
+
+    def physical_action(self, action) -> np.ndarray:
+        """The physical action (SI: the torque or force the env applies) of a normalised `action`, as a step
+        applies it (clipped to [-1, 1], times `action_scale`)."""
+        return self._checked_action(action)
+
+    def normalised_action(self, physical) -> np.ndarray:
+        """The normalised action of a `physical` one (SI), in float64: inside the action space's bounds, and as
+        precise as the physical action (a float32 copy would move it by up to 6e-8 of the bound)."""
+        return np.asarray(physical, dtype=np.float64) / self.action_scale
 
     def render(self):
         if self.render_mode != "rgb_array":

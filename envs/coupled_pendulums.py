@@ -448,7 +448,8 @@ class CoupledPendulumsEnv(PendulumEnv):
         A positive angle turns the bob towards -x.
 
     Action Space
-        Box(-0.1, 0.1, (1,)), float64: torque on pendulum 1 about its hinge (N m), through ``qfrc_applied``;
+        Box(-1, 1, (1,)), float32, normalised: ``action_scale = 0.1`` N m times it is a torque on pendulum 1
+        about its hinge, through ``qfrc_applied``;
         out-of-range actions are clipped. Zero action = the textbook problem.
 
     Rewards

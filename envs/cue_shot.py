@@ -42,7 +42,7 @@ class CueShotEnv(ShotTask):
         Box(1,), float64: the target rolling speed v* (m/s).
 
     Action Space
-        Box(-1, 1, (2,)), float64, normalised:
+        Box(-1, 1, (2,)), float32, normalised:
 
         ==== ============================================================ ======================
         idx  quantity                                                     physical range

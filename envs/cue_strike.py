@@ -554,8 +554,9 @@ class CueStrikeEnv(BlowEnv):
         ==== ================================================ ======= ==============================
 
     Action Space
-        Box(-0.1, 0.1, (2,)), float64: extra horizontal force f_x (N) at the centre and torque tau_y (N m), world
-        frame, through ``xfrc_applied``; clipped. Zero action = the textbook problem.
+        Box(-1, 1, (2,)), float32, normalised: ``action_scale = 0.1`` times it is an extra horizontal force f_x
+        (N) at the centre and torque tau_y (N m), world frame, through ``xfrc_applied``; clipped.
+        Zero action = the textbook problem.
 
     Rewards
         ``reward = -|x - x_theory(t)| / max(s, R)``: the negative deviation of the ball's distance from B2's

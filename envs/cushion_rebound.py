@@ -179,7 +179,8 @@ class CushionReboundEnv(CueStrikeEnv):
         As `CueStrikeEnv`: x, height above rest, v_x, v_z, omega_y, slip (m, m, m/s, m/s, rad/s, m/s).
 
     Action Space
-        As `CueStrikeEnv`: Box(-0.1, 0.1, (2,)): extra force f_x (N) and torque tau_y (N m); clipped.
+        As `CueStrikeEnv`: Box(-1, 1, (2,)), float32; 0.1 times it is an extra force f_x (N) and torque tau_y
+        (N m); clipped.
 
     Rewards
         As `CueStrikeEnv`: ``-|x - x_theory(t)| / max(|s|, R)`` after the rebound.

@@ -338,7 +338,8 @@ class DoublePendulumEnv(PendulumEnv):
         The absolute angle of rod 2 is obs[0] + obs[1]. A positive angle turns a bob towards -x.
 
     Action Space
-        Box(-0.1, 0.1, (1,)), float64: torque on rod 1 about its pivot (N m), through ``qfrc_applied``;
+        Box(-1, 1, (1,)), float32, normalised: ``action_scale = 0.1`` N m times it is a torque on rod 1 about
+        its pivot, through ``qfrc_applied``;
         out-of-range actions are clipped. Zero action = the textbook problem.
 
     Rewards

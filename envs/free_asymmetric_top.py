@@ -383,7 +383,8 @@ class FreeAsymmetricTopEnv(FreeRotorEnv):
         See `RotorEnv`: body-to-world quaternion (4) and body-frame angular velocity (3, rad/s).
 
     Action Space
-        Box(-1, 1, (3,)), float64: torque on the body in world axes (N m), through ``xfrc_applied``; clipped.
+        Box(-1, 1, (3,)), float32, normalised: ``action_scale = 1`` N m times it is a torque on the body in world
+        axes, through ``xfrc_applied``; clipped.
 
     Rewards
         ``reward = -|omega_B - omega_theory(t)| / |omega_theory(t)|`` (see ``info["reward_deviation"]``).

@@ -379,7 +379,8 @@ class FreeSymmetricTopEnv(FreeRotorEnv):
         See `RotorEnv`: body-to-world quaternion (4) and body-frame angular velocity (3, rad/s).
 
     Action Space
-        Box(-1, 1, (3,)), float64: torque on the body in world axes (N m), applied through ``xfrc_applied``.
+        Box(-1, 1, (3,)), float32, normalised: ``action_scale = 1`` N m times it is a torque on the body in world
+        axes, applied through ``xfrc_applied``.
         Out-of-range actions are clipped. Zero action = the textbook problem.
 
     Rewards

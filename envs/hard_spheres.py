@@ -574,8 +574,9 @@ class HardSpheresEnv(ScenarioEnv):
         ====  ==========================================  =====  ======================================
 
     Action Space
-        Box(-max_force, max_force, (3,)), float64 with ``max_force = 1`` N: a force on the projectile in world
-        axes, through ``xfrc_applied``; out-of-range actions are clipped. Zero action = the textbook problem.
+        Box(-1, 1, (3,)), float32, normalised: ``action_scale = max_force = 1`` N times it is a force on the
+        projectile in world axes, through ``xfrc_applied``; out-of-range actions are clipped.
+        Zero action = the textbook problem.
 
     Rewards
         ``reward = -|r - r_theory(t)| / a``: the distance between the simulated relative position

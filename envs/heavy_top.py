@@ -938,7 +938,8 @@ class HeavyTopEnv(RotorEnv):
         rad/s). theta = arccos of the quaternion's rotated body z-axis, z component.
 
     Action Space
-        Box(-0.05, 0.05, (3,)), float64: torque on the top in world axes (N m), through ``xfrc_applied``;
+        Box(-1, 1, (3,)), float32, normalised: ``action_scale = 0.05`` N m times it is a torque on the top in
+        world axes, through ``xfrc_applied``;
         out-of-range actions are clipped. Zero action = the textbook problem.
 
     Rewards

@@ -320,8 +320,9 @@ class MarbleShotEnv(BlowEnv):
         omega_z (rad/s), shape (6,), float64.
 
     Action Space
-        Box(-0.1, 0.1, (3,)), float64: extra force (f_x, f_y) (N) at the stick's CM and torque tau_z (N m), world
-        frame, through ``xfrc_applied``; clipped. Zero action = the textbook problem.
+        Box(-1, 1, (3,)), float32, normalised: ``action_scale = 0.1`` times it is an extra force (f_x, f_y) (N)
+        at the stick's CM and torque tau_z (N m), world frame, through ``xfrc_applied``; clipped.
+        Zero action = the textbook problem.
 
     Rewards
         ``reward = -(|x - V t'| + |y|) / L - |heading - omega t'| / pi`` until the first marble is hit (t' from

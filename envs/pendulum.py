@@ -149,7 +149,8 @@ class SimplePendulumEnv(PendulumEnv):
         bob towards -x), [1] its rate (rad/s); qpos and qvel of the joint ``hinge``.
 
     Action Space
-        Box(-0.1, 0.1, (1,)), float64: torque about the hinge axis (N m), through ``qfrc_applied``; out-of-range
+        Box(-1, 1, (1,)), float32, normalised: ``action_scale = 0.1`` N m times it is a torque about the hinge
+        axis, through ``qfrc_applied``; out-of-range
         actions are clipped. Zero action = the textbook problem.
 
     Rewards

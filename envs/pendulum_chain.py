@@ -407,7 +407,8 @@ class PendulumChainEnv(PendulumEnv):
         lifetime (the observation space depends on it); ``reset`` refuses a different ``n``.
 
     Action Space
-        Box(-0.1, 0.1, (1,)), float64: torque on pendulum 1 about its hinge (N m), through ``qfrc_applied``;
+        Box(-1, 1, (1,)), float32, normalised: ``action_scale = 0.1`` N m times it is a torque on pendulum 1
+        about its hinge, through ``qfrc_applied``;
         out-of-range actions are clipped. Zero action = the textbook problem.
 
     Rewards

@@ -118,7 +118,8 @@ class PendulumEnergyTransferEnv(ClosedLoopTask, PendulumEnv):
         until T (s).
 
     Action Space
-        Box(-0.01, 0.01, (1,)), float64: torque on pendulum 1 about its hinge (N m), through ``qfrc_applied``.
+        Box(-1, 1, (1,)), float32, normalised: ``action_scale = max_torque = 0.01`` N m times it is a torque on
+        pendulum 1 about its hinge, through ``qfrc_applied``.
 
     Rewards
         ``reward = reward_energy``: 0 at every step but the last, then ``E2(T) / E2*`` with E2* the linear
@@ -197,9 +198,10 @@ class PendulumEnergyTransferEnv(ClosedLoopTask, PendulumEnv):
         return 0.5 * p.inertia_pivot * rate * rate + 2 * p.mass * g * p.length * math.sin(0.5 * th) ** 2
 
     def theory_action(self) -> np.ndarray:
-        """The bang-bang baseline's torque for the current step (open loop, from the schedule set at reset)."""
+        """The bang-bang baseline's action for the current step (open loop, from the schedule set at reset): its
+        torque over `max_torque`, +-1 (0 past the schedule)."""
         k = self._k
-        return np.array([self._schedule[k] if k < len(self._schedule) else 0.0])
+        return self.normalised_action([self._schedule[k] if k < len(self._schedule) else 0.0])
 
     def _terms(self, action: np.ndarray) -> dict[str, float]:
         return {"energy": self.energy2() / self._optimum if self._k >= self._nsteps else 0.0}

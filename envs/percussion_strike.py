@@ -51,7 +51,7 @@ class PercussionStrikeEnv(ShotTask):
         Box(1,), float64: the target speed u* of marble C (m/s).
 
     Action Space
-        Box(-1, 1, (2,)), float64, normalised:
+        Box(-1, 1, (2,)), float32, normalised:
 
         ==== ============================================================ ======================
         idx  quantity                                                     physical range

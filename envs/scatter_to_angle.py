@@ -37,8 +37,8 @@ class ScatterToAngleEnv(ShotTask):
         Box(1,), float64: the target LAB angle psi* (rad).
 
     Action Space
-        Box(-1, 1, (1,)), float64: the impact parameter, b = 1e-3 a + (a0 + 1)/2 (0.98 - 1e-3) a (m), a = r1 +
-        r2; from nearly head-on to nearly grazing.
+        Box(-1, 1, (1,)), float32, normalised: the impact parameter, b = 1e-3 a + (a0 + 1)/2 (0.98 - 1e-3) a
+        (m), a = r1 + r2; from nearly head-on to nearly grazing.
 
     Rewards
         ``reward = reward_angle = -|psi - psi*|`` (rad), psi measured from the simulated velocities once the

@@ -85,7 +85,8 @@ class TaskEnv(ScenarioEnv):
         """Put `self.data` at the episode's initial state for `self.target` (the model is loaded)."""
 
     def theory_action(self) -> np.ndarray:
-        """The theory's action for the current state and target (in the action space)."""
+        """The theory's action for the current state and target: normalised, in the action space's bounds [-1, 1]
+        (float64, as precise as the theory; a float32 copy moves it by up to 6e-8)."""
         raise NotImplementedError
 
     def theory_actions(self) -> list[np.ndarray]:
@@ -243,7 +244,7 @@ class ClosedLoopTask(TaskEnv):
         rewards = np.zeros(self._nsteps)
         try:
             for k in range(self._nsteps):
-                terms, outcome = self._advance(self.theory_action())
+                terms, outcome = self._advance(self._checked_action(self.theory_action()))  # as `step` applies it
                 if outcome.get("diverged"):  # the episode would end here, scored as `step` scores it
                     rewards[k] = sum(self._diverged_terms()[name] for name in self.reward_terms)
                     break

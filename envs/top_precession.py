@@ -56,7 +56,8 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
         ==== ================================================ ======= ===========================
 
     Action Space
-        Box(-0.05, 0.05, (3,)), float64: torque on the top in world axes (N m), through ``xfrc_applied``;
+        Box(-1, 1, (3,)), float32, normalised: ``action_scale = max_torque = 0.05`` N m times it is a torque on
+        the top in world axes, through ``xfrc_applied``;
         out-of-range actions are clipped.
 
     Rewards
@@ -189,7 +190,8 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
         return {name: -ERROR_CAP * remaining for name in self.reward_terms}
 
     def theory_action(self) -> np.ndarray:
-        """The baseline torque (N m, world axes) for the current state (see the class docstring)."""
+        """The baseline's action for the current state: its torque (N m, world axes; see the class docstring) over
+        `max_torque`, in [-1, 1] (float64, `normalised_action`)."""
         s = self._state()
         e3, L, theta = s["e3_W"], s["L_W"], s["theta"]
         sin_t = max(math.sin(theta), 1e-9)
@@ -201,4 +203,4 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
         L_target += i1 * self.gain_tilt * (theta - self.target["tilt"]) * h  # h = e3 x n, horizontal
         torque = self.gain_momentum * (L_target - L_perp)
         torque /= max(1.0, float(np.abs(torque).max()) / self.max_torque)  # keeps its direction
-        return np.clip(torque, -self.max_torque, self.max_torque)  # rounding of the division
+        return np.clip(self.normalised_action(torque), -1.0, 1.0)  # rounding of the divisions

@@ -173,8 +173,10 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         if not np.isfinite(actions).all():
             bad = int(np.flatnonzero(~np.isfinite(actions).reshape(self.num_envs, -1).all(axis=1))[0])
             raise ValueError(f"action of env {bad} {actions[bad]} is not finite")
-        space = self.single_action_space
-        return np.clip(actions, space.low, space.high)  # out-of-range actions are clipped, as the single env does
+        # As the single env's `_checked_action`: out-of-range actions clipped to [-1, 1], then the physical (SI)
+        # action, the same product for each copy.
+        actions = np.clip(actions, -1.0, 1.0)
+        return actions if self.env._unit_scale else actions * self.env.action_scale
 
     def _step_infos(self, time, measured, predicted, deviation, reward, diverged) -> dict[str, Any]:
         """The infos of a step, as gymnasium's vector envs merge the single envs' (each key with its ``_key`` mask)."""

@@ -69,7 +69,9 @@ class DmEnv(dm_env.Environment):
         return {"observation": _spec(space, "observation")}
 
     def action_spec(self) -> specs.BoundedArray:
-        return _spec(self._env.action_space, "action")
+        # float64, as dm_control's actions are (the gymnasium space is float32 for SB3); bounds [-1, 1].
+        space = self._env.action_space
+        return specs.BoundedArray(space.shape, np.float64, space.low, space.high, name="action")
 
     def reward_spec(self) -> specs.Array:
         return specs.Array(shape=(), dtype=np.float64, name="reward")

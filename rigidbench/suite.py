@@ -87,9 +87,7 @@ class ScenarioTask(base.Task):
 
     def before_step(self, action, physics: Physics) -> None:
         self._bind(physics)
-        self._env._apply_action(
-            np.clip(np.asarray(action, dtype=float), self._env.action_space.low, self._env.action_space.high)
-        )
+        self._env._apply_action(self._env._checked_action(np.asarray(action, dtype=float)))
 
     def get_observation(self, physics: Physics) -> collections.OrderedDict:
         self._bind(physics)

@@ -264,7 +264,7 @@ def _percussion_reference_deviation(env, measured, predicted):
 def _reference_wrench(env, action):
     from rigidbench.envs.cue_strike import CueStrikeEnv
 
-    a = np.clip(action, env.action_space.low, env.action_space.high)
+    a = np.clip(action, -1.0, 1.0) * env.action_scale  # the physical (SI) wrench of the normalised action
     return [a[0], 0.0, 0.0, 0.0, a[1], 0.0] if isinstance(env, CueStrikeEnv) else [a[0], a[1], 0.0, 0.0, 0.0, a[2]]
 
 
@@ -436,7 +436,7 @@ def _top_precession_reference_rollout(env):
     rewards = []
     try:
         for _ in range(env._nsteps):
-            env.data.xfrc_applied[body, 3:6] = env.theory_action()
+            env.data.xfrc_applied[body, 3:6] = env.theory_action() * env.action_scale
             mujoco.mj_step(env.model, env.data, env.frame_skip)
             assert np.isfinite(env.data.qvel).all()
             rewards.append(sum(_top_precession_reference_terms(env).values()))
