@@ -808,6 +808,7 @@ class HeavyTop(Scenario):
         if steady:
             slow, fast = tops.steady_precession_rates(i1, i3, mgh, spin, tilt)
             out["precession-rate"] = slow if abs(phi_dot0 - slow) <= abs(phi_dot0 - fast) else fast
+        out["_roundoff_scale"] = _roundoff_scales(out, self.duration(out))
         return out
 
     def duration(self, prediction: Mapping[str, Any]) -> float:
@@ -883,6 +884,47 @@ class HeavyTop(Scenario):
         if np.count_nonzero(window) < 3:
             return float("nan")
         return float(np.polyfit(t[rise][window], np.log(theta[rise][window]), 1)[0])
+
+
+def _roundoff_scales(prediction: Mapping[str, Any], duration: float) -> dict[str, float]:
+    """The float32 round-off scales of the checks whose quantity is small against what float32 rounds
+    (`Scenario.roundoff_scale`; theta-min, theta-max and max-tilt-linear take the generic rule for a small angle:
+    float32 keeps the axis to an absolute ~eps rad per step, its quaternion's numbers being O(1), a random walk of
+    eps sqrt(N) rad over the run; measured on Warp and MJX float32 at spins of 1.7e3-9.2e3 rad/s, theta's extrema
+    were off by 0.5-1.0 eps sqrt(N) rad). Never below 1, the relative floor of any quantity. In units of one radian
+    of that noise:
+
+    * a rate read from an angle's advance over the run (mean-precession, the steady precession-rate) is as precise
+      as the advance, |phi_dot| T rad (measured 1.0-1.7 eps sqrt(N) / (|phi_dot| T) on a looping and a slow steady
+      top: a top spinning 2e5 times faster than it precesses moved 2.6e-3 rad in the run);
+    * the precession at a turning point, phi_dot = (b - a u) / (1 - u^2), is a difference of terms of size
+      |b| + |a u|, each known to float32's relative noise (a = I3 omega3 / I1 and b = p_phi / I1 are the spin's
+      and the vertical momentum's): scale (|b| + |a u|) / |b - a u|, large where the top loops (b ~ a u). An upper
+      bound: the dynamics keeps the two noises correlated, and on four looping tops the errors measured were
+      0.0002-0.13 of it, so a float32 census reports these checks unresolved more often than it must;
+    * the nutation period is a phase's advance, 2 pi n_nut nutations of amplitude theta_max - theta_min: the axis'
+      noise moves the phase by noise / amplitude (measured 0.13-0.22 of that; a fast top nutates by 1e-4 rad, a few
+      times the noise);
+    * the falling top's growth rate is a slope of ln(theta) fitted from theta = 20 theta0 up, where the noise is
+      1 / (20 theta0) of theta, over ln(5) of ln(theta).
+    """
+    scales: dict[str, float] = {}
+    for name in ("mean-precession", "precession-rate"):
+        rate = abs(float(prediction.get(name, 0.0)))
+        if rate > 0:
+            scales[name] = max(1.0, 1.0 / (rate * duration))
+    top = prediction["_theory"]
+    for name, u in (("precession-at-theta-min", top.roots[1]), ("precession-at-theta-max", top.roots[0])):
+        difference = abs(top.b - top.a * u)
+        if difference > 0:
+            scales[name] = max(1.0, (abs(top.b) + abs(top.a * u)) / difference)
+    amplitude = float(prediction["theta-max"] - prediction["theta-min"])
+    if amplitude > 0:
+        phase = 2 * math.pi * float(prediction["_run_nutations"])
+        scales["nutation-period"] = max(1.0, 1.0 / (amplitude * phase))
+    if "tilt-growth-rate" in prediction:
+        scales["tilt-growth-rate"] = max(1.0, 1.0 / (20 * float(prediction["_tilt0"]) * math.log(5.0)))
+    return scales
 
 
 def _axis_at(t: np.ndarray, e3_W: np.ndarray, at: np.ndarray) -> np.ndarray:

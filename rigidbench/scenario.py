@@ -332,7 +332,8 @@ class Scenario:
     def roundoff_scale(self, name: str, prediction: Mapping[str, Any]) -> float:
         """The size of check `name`'s quantity, in its unit, that a float32 engine's round-off is relative to
         (`rigidbench.engines.roundoff_floor`): 1 for a relative error or a dimensionless ratio, else the expected
-        value's size (at least 1 rad for an angle).
+        value's size (at least 1 rad for an angle, whose rounding is absolute: a relative check of an angle theta
+        has scale max(theta, 1 rad) / theta).
 
         A scenario gives the scale as ``prediction["_roundoff_scale"][name]`` where the quantity is expected to be 0
         in a unit (e.g. the ball's speed for a slip that should vanish), where its motion amplifies round-off (a
@@ -344,10 +345,16 @@ class Scenario:
         given = prediction.get("_roundoff_scale", {}).get(name)
         if given is not None:
             return float(given)
+        if check.unit == "rad":
+            # An angle is read from an orientation whose numbers are O(1): float32 rounds it to an absolute
+            # ~eps rad, however small the angle, so a relative check of a small angle theta sees 1 rad / theta.
+            size = abs(float(prediction[name]))
+            if check.kind == "rel":
+                return max(size, 1.0) / size if size > 0 else 1.0
+            return max(size, 1.0)
         if check.kind == "rel" or check.unit == "1":
             return 1.0
-        size = abs(float(prediction[name]))
-        return max(size, 1.0) if check.unit == "rad" else size
+        return abs(float(prediction[name]))
 
     def _roundoff_check(
         self, check: Check, prediction: Mapping[str, Any], precision: str, nstep: int
