@@ -321,6 +321,8 @@ class CoupledPendulums(Scenario):
         if excited.all():
             duration = max(duration, 2.5 * beats.transfer_time)
         ratios = modes.shape_ratios()[1]
+        rho = pendulums.roundoff(model, float(np.abs(angles0).max()))
+        gains = _roundoff_gains(omega_a, omega_a - omega_s, duration)
         return {
             "_modes": modes,
             "_excited": excited,
@@ -329,7 +331,9 @@ class CoupledPendulums(Scenario):
             "_duration": duration,
             "_scale": float(np.abs(angles0).max()),
             "_energy_scale": float(pendulums.row_energy(model, angles0[None], np.zeros((1, 2)))[0]),
-            "_tolerance": _roundoff_tolerances(model, angles0, omega_a, omega_a - omega_s, duration),
+            "_tolerance": _roundoff_tolerances(rho, gains),
+            "_roundoff_eps": pendulums.roundoff_per_eps(rho, gains),
+            "_roundoff_eps_rule": pendulums.ROUNDOFF_EPS_RULE,
             "omega-in-phase": omega_s,
             "omega-anti-phase": omega_a,
             "shape-in-phase": float(ratios[0]),
@@ -375,21 +379,22 @@ def _rate0(cls: type[CoupledPendulums]) -> float:
     return pendulums.default_rate(cls(), lambda p: _omegas(p)[1])
 
 
-def _roundoff_tolerances(
-    model: mujoco.MjModel, angles0: np.ndarray, omega_a: float, split: float, duration: float
-) -> dict[str, float]:
-    """Each check's tolerance, or its double-precision floor if larger (`pendulums.ROUNDOFF`)."""
-    rho = pendulums.roundoff(model, float(np.abs(angles0).max()))
-    floor = {
-        "omega-in-phase": 0.5 * rho,
-        "omega-anti-phase": 0.5 * rho,
-        "shape-in-phase": 3 * rho,
-        "shape-anti-phase": 3 * rho,
-        "transfer-time": 0.5 * rho * omega_a / split if split > 0 else np.inf,
-        "beat-waveform": 0.5 * rho * omega_a * duration,
-        "energy-drift": 50 * rho,
+def _roundoff_gains(omega_a: float, split: float, duration: float) -> dict[str, float]:
+    """Each check's double-precision floor over rho (`pendulums.ROUNDOFF_DOMAIN_TEXT`)."""
+    return {
+        "omega-in-phase": 0.5,
+        "omega-anti-phase": 0.5,
+        "shape-in-phase": 3.0,
+        "shape-anti-phase": 3.0,
+        "transfer-time": 0.5 * omega_a / split if split > 0 else np.inf,
+        "beat-waveform": 0.5 * omega_a * duration,
+        "energy-drift": 50.0,
     }
-    return {c.name: max(c.tolerance, floor[c.name]) for c in CHECKS}
+
+
+def _roundoff_tolerances(rho: float, gains: dict[str, float]) -> dict[str, float]:
+    """Each check's tolerance, or its double-precision floor ``gain x rho`` if larger."""
+    return {c.name: max(c.tolerance, gains[c.name] * rho) for c in CHECKS}
 
 
 def transfer_time(t: np.ndarray, angle2: np.ndarray, rate2: np.ndarray, *, before: float = np.inf) -> float:

@@ -61,6 +61,49 @@ _SOFT_BOUND = (
     "for penetrations <= 1e-2 a and b <= 0.99 a); set per run, listed at the defaults (b -> a, |dpsi/dtheta| <= 1)"
 )
 
+CONTACT_ROUNDOFF_RULE = (
+    "contact: the force k delta is read from a penetration delta <= u_n / sqrt(k) that the engine computes from "
+    "positions up to a = r1 + r2 from the origin, each rounded to ~eps a: a penetration error ~eps a that holds "
+    "over the contact, moving the impulse and the energy by ~4 eps a / delta (C = 10 in place of 4)"
+)
+
+
+def _contact_roundoff(a: float, depth: float, prediction: Mapping[str, Any]) -> dict[str, Any]:
+    """Float32 floors of the collision checks in units of eps (`Scenario._roundoff_check`'s
+    ``prediction["_roundoff_eps"]``): the penetration's rounding eps a against the deepest penetration `depth`
+    (m), times the random walk's factor C = 10 (`engines.ROUNDOFF_FACTOR`) and each check's scale (1 for an energy
+    or speed fraction and for an angle in rad; 2 for the opening angle, a sum of two; the soft-shift exponent's
+    own propagation of an angle error, as its tolerance). Measured on MJX float32 head-on (a = 0.1 m, delta = u /
+    sqrt(k) = 1e-4 m): energy 6.2e-4 off, 5.2 eps a / delta; this floor is 10 eps a / delta = 1.2e-3."""
+    from rigidbench.engines import ROUNDOFF_FACTOR
+
+    gain = ROUNDOFF_FACTOR * a / depth
+    scales = dict.fromkeys(
+        (
+            "cm-angle",
+            "cm-angle-hard",
+            "projectile-lab-angle",
+            "target-lab-angle",
+            "projectile-lab-angle-hard",
+            "target-lab-angle-hard",
+            "projectile-energy",
+            "target-energy",
+            "projectile-speed",
+            "energy",
+            "restitution",
+            "max-lab-angle",
+        ),
+        1.0,
+    )
+    scales["opening-angle"] = 2.0
+    tolerance = prediction["_tolerance"]["soft-shift-exponent"]
+    scales["soft-shift-exponent"] = (tolerance - 1e-3) / ANGLE_ERROR if tolerance > 1e-3 else 0.0
+    return {
+        "_roundoff_eps": {name: gain * scale for name, scale in scales.items() if scale > 0},
+        "_roundoff_eps_rule": CONTACT_ROUNDOFF_RULE,
+    }
+
+
 CHECKS = (
     Check("cm-angle", "rad", 5e-6, "abs", _RK4, "C8: theta = pi - 2 int b dr / (r^2 sqrt(1 - b^2/r^2 - V/E)), eq 9.16"),
     Check("cm-angle-hard", "rad", 5e-3, "abs", _SOFT_BOUND, "C5: theta = 2 arccos(b/a), Wilcox section 9.9"),
@@ -427,6 +470,8 @@ class HardSpheres(Scenario):
                 "max-lab-angle": 1e-5 + (1.5 * shift_b0) ** 2 / x if x > 1 else 1e-5,
             },
         }
+        if elastic and b < a:
+            out.update(_contact_roundoff(a, speed * np.sqrt(1.0 - (b / a) ** 2) / np.sqrt(spring.stiffness), out))
         return out
 
     def _contact_time(self, model: mujoco.MjModel) -> float:

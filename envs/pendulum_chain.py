@@ -261,6 +261,8 @@ class PendulumChain(Scenario):
         closed = modes.frequencies
         omega_o7 = osc.normal_modes(*osc.spring_chain_matrices(n, p.inertia_pivot, mgl, k, sp.height)).frequencies
         angles0 = data.qpos.copy()
+        rho = pendulums.roundoff(model, float(np.abs(angles0).max()))
+        gains = _roundoff_gains(omega_o7)
         return {
             "_modes": modes,
             "_omega_O7": omega_o7,
@@ -268,7 +270,9 @@ class PendulumChain(Scenario):
             "_angles0": angles0,
             "_scale": float(np.abs(angles0).max()),
             "_energy_scale": float(pendulums.row_energy(model, angles0[None], np.zeros((1, n)))[0]),
-            "_tolerance": _roundoff_tolerances(pendulums.roundoff(model, float(np.abs(angles0).max())), omega_o7),
+            "_tolerance": _roundoff_tolerances(rho, gains),
+            "_roundoff_eps": pendulums.roundoff_per_eps(rho, gains),
+            "_roundoff_eps_rule": pendulums.ROUNDOFF_EPS_RULE,
             "omega-lowest": float(closed[0]),
             "omega-highest": float(closed[-1]),
             "mode-frequencies": 0.0,
@@ -303,11 +307,16 @@ def _rate0(cls: type[PendulumChain]) -> float:
     return pendulums.default_rate(cls(), _highest)
 
 
-def _roundoff_tolerances(rho: float, omega: np.ndarray) -> dict[str, float]:
-    """Each check's tolerance, or its double-precision floor if larger (`pendulums.ROUNDOFF`); the mode purity's
-    floor is ``rho x purity_gain`` (`purity_gain`)."""
+def _roundoff_gains(omega: np.ndarray) -> dict[str, float]:
+    """Each check's double-precision floor over rho (`pendulums.ROUNDOFF_DOMAIN_TEXT`): 0.5, the mode purity's
+    `purity_gain`, the energy drift's 50."""
     factor = {"mode-purity": purity_gain(omega), "energy-drift": 50.0}
-    return {c.name: max(c.tolerance, factor.get(c.name, 0.5) * rho) for c in CHECKS}
+    return {c.name: factor.get(c.name, 0.5) for c in CHECKS}
+
+
+def _roundoff_tolerances(rho: float, gains: dict[str, float]) -> dict[str, float]:
+    """Each check's tolerance, or its double-precision floor ``gain x rho`` if larger."""
+    return {c.name: max(c.tolerance, gains[c.name] * rho) for c in CHECKS}
 
 
 # Run length in periods of the lowest mode (`PendulumChain.duration`).

@@ -15,6 +15,7 @@ l^2`` read back from the compiled model (THEORY.md O2).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -83,6 +84,23 @@ def roundoff(model: mujoco.MjModel, amplitude: float) -> float:
     extent = max(abs(q.pivot_x) for q in pend)
     eps = np.finfo(float).eps
     return float(eps * extent * (p.mass * g + k * d) / ((p.mass * g * p.length + k * d * d) * abs(amplitude)))
+
+
+ROUNDOFF_EPS_RULE = (
+    "floor = gain x rho, rho = eps X (M g + k d) / ((M g l + k d^2) |a|) the restoring torque's relative round-off "
+    "from world positions up to X out, proportional to the precision's eps; the gains are the float64 floors'"
+)
+
+
+def roundoff_per_eps(rho: float, gains: Mapping[str, float]) -> dict[str, float]:
+    """The floors ``gain x rho`` (`ROUNDOFF_DOMAIN_TEXT`) in units of the precision's eps.
+
+    rho is eps times the torque's amplification X (M g + k d) / ((M g l + k d^2) |a|), the same mechanism in any
+    precision: a float32 engine's floor is this times float32's eps (`Scenario._roundoff_check`), 5.4e8 times the
+    float64 floor the tolerances carry. Infinite gains (a check that does not apply) are left out.
+    """
+    eps = float(np.finfo(float).eps)
+    return {name: g * rho / eps for name, g in gains.items() if math.isfinite(g * rho)}
 
 
 def spring_collapse_limit(height: float) -> float:

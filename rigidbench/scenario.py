@@ -339,7 +339,9 @@ class Scenario:
         in a unit (e.g. the ball's speed for a slip that should vanish), where its motion amplifies round-off (a
         spin near the separatrix), or where its measurement subtracts large numbers (a spacing between positions far
         from the origin), in units of the quantity. A quantity read from a coordinate that a steady motion advances
-        every step is named in ``prediction["_roundoff_secular"]`` (its floor grows like the step count).
+        every step is named in ``prediction["_roundoff_secular"]`` (its floor grows like the step count). A floor the
+        scenario derives itself, proportional to the precision's eps, is ``prediction["_roundoff_eps"][name]`` in
+        units of eps, with ``prediction["_roundoff_eps_rule"]`` saying where it comes from (`_roundoff_check`).
         """
         check = self.check(name)
         given = prediction.get("_roundoff_scale", {}).get(name)
@@ -372,6 +374,15 @@ class Scenario:
         floor, rule = roundoff_floor(precision, nstep, self.roundoff_scale(check.name, prediction), secular=secular)
         if floor == 0:
             return check, False
+        # A scenario that derives its own round-off floor as a multiple of the precision's eps (the float64 floor
+        # its tolerance already carries, e.g. a torque computed from rounded world positions) has it scaled to the
+        # engine's eps; the larger of the two floors counts.
+        per_eps = prediction.get("_roundoff_eps", {}).get(check.name)
+        if per_eps is not None:
+            derived = float(per_eps) * float(np.finfo(np.dtype(precision)).eps)
+            if derived > floor:
+                floor = derived
+                rule = f"the scenario's floor {float(per_eps):.3g} eps ({prediction['_roundoff_eps_rule']})"
         size = 1.0 if check.kind == "rel" or check.unit == "1" else abs(float(prediction[check.name]))
         unresolved = size > 0 and floor >= UNRESOLVED_FRACTION * size
         reason = f"{check.reason}; + {precision} round-off {rule} = {floor:.3g} (float64 tolerance {check.tolerance:g})"
@@ -573,6 +584,14 @@ class Scenario:
         model = self.build(params, settings)
         actual = self.read_params(model)
         data = self.start(model, actual)
+        engine = settings.engine_object() if settings is not None and settings.engine is not None else None
+        if engine is not None and engine.precision != "float64":
+            # Predict from what the engine simulates: the model and initial state rounded to its precision
+            # (`rigidbench.engines.stored`); the parameters reported are read back from it.
+            from rigidbench.engines import stored
+
+            model, data = stored(model, data, engine.precision)
+            actual = self.read_params(model)
         prediction = self.predict(model, data)
         duration = float(self.duration(prediction))
         if not (math.isfinite(duration) and duration > 0):

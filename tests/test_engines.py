@@ -231,7 +231,7 @@ def test_float32_floors_of_a_fast_top_follow_what_float32_rounds(fake_engine):
     settings = Settings(engine="mjx")
     job = runner.plan(["heavy-top:looping"], {k: repr(v) for k, v in FAST_LOOPING_TOP.items()}, settings)[0]
     rows = {r["check"]: r for r in runner.run_job(job, settings)}
-    prediction = registry.get("heavy-top").prepare("looping", FAST_LOOPING_TOP).prediction
+    prediction = registry.get("heavy-top").prepare("looping", FAST_LOOPING_TOP, settings).prediction
     noise = engines.ROUNDOFF_FACTOR * float(np.finfo(np.float32).eps) * math.sqrt(rows["theta-min"]["nstep"] + 1)
     assert rows["theta-min"]["tolerance"] == pytest.approx(1e-6 + noise / prediction["theta-min"])
     duration = rows["mean-precession"]["duration"]
@@ -242,3 +242,57 @@ def test_float32_floors_of_a_fast_top_follow_what_float32_rounds(fake_engine):
     for name, row in rows.items():
         if name not in ("nutation-period", "precession-at-theta-min", "precession-at-theta-max"):
             assert row["status"] == results.PASS, row
+
+
+def test_stored_rounds_every_float_of_model_and_state_and_leaves_float64_alone():
+    scenario = registry.get("free-asymmetric-top")
+    prep = scenario.prepare("minor-axis")
+    model, data = engines.stored(prep.model, prep.data, "float64")
+    assert model is prep.model and data is prep.data
+    model32, data32 = engines.stored(prep.model, prep.data, "float32")
+    for ours, theirs in ((model32.body_inertia, prep.model.body_inertia), (data32.qvel, prep.data.qvel)):
+        assert np.array_equal(ours, theirs.astype(np.float32).astype(np.float64))
+    assert model32.opt.timestep == float(np.float32(prep.model.opt.timestep))
+    assert data32.time == prep.data.time
+    assert not np.array_equal(data32.qvel, prep.data.qvel)  # 0.1 and 0.05 rad/s are not float32 numbers
+
+
+# A rotor with I3 - I2 = 1.1e-5 I3 (a Warp census draw): float32 stores that difference 1e-2 off.
+NEAR_DEGENERATE_ROTOR = {
+    "I1": 0.00010450936356129997,
+    "I2": 0.15660197226929382,
+    "I3": 0.1566037169730922,
+    "omega": [-0.012408452880634094, 0.0005722245041590092, 0.26235992873683917],
+}
+
+
+def test_a_float32_engine_is_scored_against_the_body_it_stores(fake_engine):
+    """The prediction comes from the model and state rounded as the engine stores them (`engines.stored`): the
+    near-degenerate rotor's period moves 4e-3 by that rounding alone, more than the float32 floor (1e-3); predicted
+    from the rounded body, the float32 run passes."""
+    scenario = registry.get("free-asymmetric-top")
+    settings = Settings(engine="mjx")
+    exact = scenario.prepare("minor-axis", NEAR_DEGENERATE_ROTOR)
+    rounded = scenario.prepare("minor-axis", NEAR_DEGENERATE_ROTOR, settings)
+    assert rounded.params["I2"] == float(np.float32(NEAR_DEGENERATE_ROTOR["I2"]))  # reported as simulated
+    moved = abs(rounded.prediction["period"] / exact.prediction["period"] - 1)
+    assert 1e-3 < moved < 1e-2
+    overrides = {
+        k: ",".join(map(repr, v)) if isinstance(v, list) else repr(v) for k, v in NEAR_DEGENERATE_ROTOR.items()
+    }
+    rows = runner.run_job(runner.plan(["free-asymmetric-top:minor-axis"], overrides, settings)[0], settings)
+    assert {r["check"]: r["status"] for r in rows} == dict.fromkeys((r["check"] for r in rows), results.PASS)
+
+
+def test_float32_positions_cost_a_stiff_contact_its_energy_within_the_contact_floor(fake_engine):
+    """Rounding only the stored state to float32 each step (the fake engine, float64 arithmetic) loses 6.2e-4 of the
+    head-on collision's energy, as MJX float32 does (6.23e-4): the penetration (1e-4 m) is read from positions of
+    0.1 m rounded to ~eps x 0.1 m. That is 14 times the random-walk floor, and within the contact floor
+    (`hard_spheres._contact_roundoff`, 10 eps a / delta = 1.2e-3), which every check keeps."""
+    settings = Settings(engine="mjx")
+    rows = {r["check"]: r for r in runner.run_job(runner.plan(["hard-spheres:head-on"], None, settings)[0], settings)}
+    energy = rows["energy"]
+    walk, _ = roundoff_floor("float32", energy["nstep"], 1.0)
+    assert energy["error"] > 10 * walk
+    assert "the scenario's floor" in energy["tolerance_reason"] and "penetration" in energy["tolerance_reason"]
+    assert all(r["status"] == results.PASS for r in rows.values()), rows
