@@ -260,6 +260,12 @@ def _warp():
 # replay). Warp steps all worlds of a batch in one launch anyway, so its rollouts run one at a time.
 _WARP_LOCK = threading.RLock()
 
+# Two cases running MJX programs at once (the runner's two threads, both in cross-section beams) hung a full `run
+# --engine mjx` on this 2-core CPU: both threads and XLA's two CPU pool threads waiting on futexes, the process idle
+# for 28 min (py-spy: both in `MjxEngine.rollout`'s program call). MJX steps a whole batch in one program anyway
+# (vmap), so its rollouts run one at a time.
+_MJX_LOCK = threading.RLock()
+
 
 def _steps_per_graph(nstep: int) -> int:
     """Steps captured in one Warp graph: enough that launching it costs little per step, few enough that the
@@ -380,6 +386,12 @@ class MjxEngine(Engine):
             raise EngineRefused(f"engine mjx cannot simulate this model: {_feature(exc)}") from None
 
     def rollout(
+        self, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None = None
+    ) -> np.ndarray:
+        with _MJX_LOCK:  # one program at a time: see `_MJX_LOCK`
+            return self._rollout(model, states0, nstep, control)
+
+    def _rollout(
         self, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None = None
     ) -> np.ndarray:
         jax = self._jax()
