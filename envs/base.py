@@ -16,6 +16,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
+from rigidbench import engines
 from rigidbench.scenario import Scenario
 from rigidbench.settings import Settings, profile, read_settings
 
@@ -113,6 +114,10 @@ class ScenarioEnv(gym.Env):
     # ---- the MjData and the views into it ---------------------------------------------------------------
 
     _views_ready = False  # True once the episode's views are bound: from then on a new `data` rebinds them
+    # The float precision the model and state are stored in (`rigidbench.engines.stored_model`): float64 for the env
+    # itself; a batched vector env on a float32 engine sets its template's to float32 before its first reset, so
+    # the theory is the body that engine simulates.
+    _precision = "float64"
 
     @property
     def data(self) -> mujoco.MjData:
@@ -372,11 +377,13 @@ class ScenarioEnv(gym.Env):
         if key not in self._models:
             if len(self._models) >= 16:
                 self._models.pop(next(iter(self._models)))
-            self._models[key] = self.scenario.build(resolved, self._settings)
+            self._models[key] = engines.stored_model(self.scenario.build(resolved, self._settings), self._precision)
         self._views_ready = False  # the views of the last episode may not fit this model: `_start_views` rebinds
         self.model = self._models[key]
         self._actual = self.scenario.read_params(self.model)
         self.data = self.scenario.start(self.model, self._actual)
+        if self._precision != "float64":
+            self.data = engines.stored_state(self.model, self.model, self.data, self._precision)
         self._prediction = self.scenario.predict(self.model, self.data)
         self.episode_duration = float(self.scenario.duration(self._prediction))
         self._settings_record = read_settings(self.model)

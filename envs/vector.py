@@ -79,6 +79,8 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         self._engine = engines.engine_for(engine, device=device, precision=precision)
         self._nthread = nthread
         self.env = env_cls(**env_kwargs)  # the template: resolves, builds, predicts and scores through its hooks
+        # Its model and state as the engine stores them (float32 on Warp and MJX float32), from the first reset on.
+        self.env._precision = self._engine.precision if self._engine is not None else "float64"
         self.single_observation_space = self.env.observation_space
         self.single_action_space = self.env.action_space
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)

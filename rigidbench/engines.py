@@ -300,9 +300,8 @@ def roundoff_floor(precision: str, nstep: int, scale: float, *, secular: bool = 
 
 
 def stored(model: mujoco.MjModel, data: mujoco.MjData, precision: str) -> tuple[mujoco.MjModel, mujoco.MjData]:
-    """The model and the state as an engine of `precision` stores them: every float of the model (its arrays and
-    its options) and of the state rounded to `precision`, in float64 copies, the model's constants recomputed
-    (`mj_setConst`) and the state's derived quantities (`mj_forward`). The inputs on float64.
+    """The model and the state as an engine of `precision` stores them (`stored_model`, `stored_state`); the inputs
+    themselves on float64.
 
     A float32 engine simulates this body, not the one asked for: rounding moves each number by up to eps/2 = 6e-8
     of itself, and a quantity that depends on a small difference of stored numbers moves much more (a rotor with
@@ -311,6 +310,15 @@ def stored(model: mujoco.MjModel, data: mujoco.MjData, precision: str) -> tuple[
     """
     if precision == "float64":
         return model, data
+    rounded = stored_model(model, precision)
+    return rounded, stored_state(rounded, model, data, precision)
+
+
+def stored_model(model: mujoco.MjModel, precision: str) -> mujoco.MjModel:
+    """A float64 copy of `model` with every float of it (its arrays and its options) rounded to `precision`, its
+    constants recomputed (`mj_setConst`); `model` itself on float64."""
+    if precision == "float64":
+        return model
     dtype = np.dtype(precision)
     rounded = copy.copy(model)
     for holder in (rounded, rounded.opt):
@@ -325,16 +333,22 @@ def stored(model: mujoco.MjModel, data: mujoco.MjData, precision: str) -> tuple[
                 value[...] = value.astype(dtype)
             elif type(value) is float:
                 setattr(holder, name, float(dtype.type(value)))
-    state = mujoco.MjData(rounded)
-    mujoco.mj_setConst(rounded, state)
+    mujoco.mj_setConst(rounded, mujoco.MjData(rounded))
+    return rounded
+
+
+def stored_state(rounded: mujoco.MjModel, model: mujoco.MjModel, data: mujoco.MjData, precision: str) -> mujoco.MjData:
+    """A new MjData of `rounded` (`stored_model` of `model`) at `data`'s state with every number rounded to
+    `precision` but the time (the clock is the step count in float64, `clock`), derived quantities computed."""
     full = np.empty(mujoco.mj_stateSize(model, STATE))
     mujoco.mj_getState(model, data, full, STATE)
     time = full[0]
-    full = full.astype(dtype).astype(np.float64)
-    full[0] = time  # the clock is the step count in float64 (`clock`), never the engine's own
+    full = full.astype(np.dtype(precision)).astype(np.float64)
+    full[0] = time
+    state = mujoco.MjData(rounded)
     mujoco.mj_setState(rounded, state, full, STATE)
     mujoco.mj_forward(rounded, state)
-    return rounded, state
+    return state
 
 
 def clock(t0: np.ndarray, timestep: float, nstep: int) -> np.ndarray:

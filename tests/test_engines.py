@@ -296,3 +296,22 @@ def test_float32_positions_cost_a_stiff_contact_its_energy_within_the_contact_fl
     assert energy["error"] > 10 * walk
     assert "the scenario's floor" in energy["tolerance_reason"] and "penetration" in energy["tolerance_reason"]
     assert all(r["status"] == results.PASS for r in rows.values()), rows
+
+
+def test_an_env_stored_in_float32_predicts_from_the_rounded_body_and_keeps_its_model_across_resets():
+    """What a batched vector env on a float32 engine does to its template (`envs/vector.py`): the model and the
+    initial state as that engine stores them, the theory from those; one model per configuration, so the engine's
+    batch is not rebuilt at every reset."""
+    import gymnasium as gym
+
+    env = gym.make("rigidbench/FreeAsymmetricTop-v0").unwrapped
+    env._precision = "float32"
+    options = {"case": "minor-axis", "params": dict(NEAR_DEGENERATE_ROTOR)}
+    env.reset(options=options)
+    model = env.model
+    assert np.array_equal(model.body_inertia, model.body_inertia.astype(np.float32).astype(np.float64))
+    assert np.array_equal(env.data.qvel, env.data.qvel.astype(np.float32).astype(np.float64))
+    exact = registry.get("free-asymmetric-top").prepare("minor-axis", NEAR_DEGENERATE_ROTOR)
+    assert abs(env.prediction["period"] / exact.prediction["period"] - 1) > 1e-3  # the stored body's period
+    env.reset(options=options)
+    assert env.model is model
