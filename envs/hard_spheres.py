@@ -78,23 +78,8 @@ def _contact_roundoff(a: float, depth: float, prediction: Mapping[str, Any]) -> 
     from rigidbench.engines import ROUNDOFF_FACTOR
 
     gain = ROUNDOFF_FACTOR * a / depth
-    scales = dict.fromkeys(
-        (
-            "cm-angle",
-            "cm-angle-hard",
-            "projectile-lab-angle",
-            "target-lab-angle",
-            "projectile-lab-angle-hard",
-            "target-lab-angle-hard",
-            "projectile-energy",
-            "target-energy",
-            "projectile-speed",
-            "energy",
-            "restitution",
-            "max-lab-angle",
-        ),
-        1.0,
-    )
+    # Every check but the momentum (exact pairwise forces: the random walk's floor) is read from the impulse.
+    scales = {c.name: 1.0 for c in CHECKS if c.name not in ("momentum", "opening-angle", "soft-shift-exponent")}
     scales["opening-angle"] = 2.0
     tolerance = prediction["_tolerance"]["soft-shift-exponent"]
     scales["soft-shift-exponent"] = (tolerance - 1e-3) / ANGLE_ERROR if tolerance > 1e-3 else 0.0
