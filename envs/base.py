@@ -110,6 +110,8 @@ class ScenarioEnv(gym.Env):
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=physical.shape, dtype=np.float32)
         self._action_shape = self.action_space.shape
         self._unit_scale = bool(np.all(self.action_scale == 1.0))  # a unit box: the physical action is the action
+        self._scale_values = self.action_scale.tolist()
+        self._physical_out = np.empty(physical.shape)  # `_checked_action`'s output buffer
 
     # ---- the MjData and the views into it ---------------------------------------------------------------
 
@@ -302,19 +304,28 @@ class ScenarioEnv(gym.Env):
             raise ValueError(f"action shape {action.shape} != {self._action_shape}")
         # Fast path: every component inside [-1, 1] (NaN fails the comparison and takes the slow path). A loop,
         # not all(...): each costs ~0.3 us a step; the shape was checked above.
-        for v in action.tolist():
+        values = action.tolist()
+        for v in values:
             if not -1.0 <= v <= 1.0:
                 if not np.isfinite(action).all():
                     raise ValueError(f"action {action} is not finite")
                 # Out-of-range actions are clipped to the action space (gymnasium's MuJoCo convention).
                 action = np.clip(action, -1.0, 1.0)
+                values = action.tolist()
                 break
-        return action if self._unit_scale else action * self.action_scale
+        if self._unit_scale:
+            return action
+        # The product written into the env's own buffer, one float at a time: 0.13 us against 0.52 us for
+        # `action * action_scale` (a new array). The buffer is the next step's too: a hook uses it at once.
+        out, scale = self._physical_out, self._scale_values
+        for i, v in enumerate(values):
+            out[i] = v * scale[i]
+        return out
 
     def physical_action(self, action) -> np.ndarray:
         """The physical action (SI: the torque or force the env applies) of a normalised `action`, as a step
         applies it (clipped to [-1, 1], times `action_scale`)."""
-        return self._checked_action(action)
+        return np.array(self._checked_action(action))
 
     def normalised_action(self, physical) -> np.ndarray:
         """The normalised action of a `physical` one (SI), in float64: inside the action space's bounds, and as
