@@ -394,7 +394,7 @@ class ScenarioEnv(gym.Env):
         self._actual = self.scenario.read_params(self.model)
         self.data = self.scenario.start(self.model, self._actual)
         if self._precision != "float64":
-            self.data = engines.stored_state(self.model, self.model, self.data, self._precision)
+            self.data = engines.stored_state(self.model, self.data, self._precision)
         self._prediction = self.scenario.predict(self.model, self.data)
         self.episode_duration = float(self.scenario.duration(self._prediction))
         self._settings_record = read_settings(self.model)

@@ -311,7 +311,7 @@ def stored(model: mujoco.MjModel, data: mujoco.MjData, precision: str) -> tuple[
     if precision == "float64":
         return model, data
     rounded = stored_model(model, precision)
-    return rounded, stored_state(rounded, model, data, precision)
+    return rounded, stored_state(rounded, data, precision)
 
 
 def stored_model(model: mujoco.MjModel, precision: str) -> mujoco.MjModel:
@@ -337,11 +337,12 @@ def stored_model(model: mujoco.MjModel, precision: str) -> mujoco.MjModel:
     return rounded
 
 
-def stored_state(rounded: mujoco.MjModel, model: mujoco.MjModel, data: mujoco.MjData, precision: str) -> mujoco.MjData:
-    """A new MjData of `rounded` (`stored_model` of `model`) at `data`'s state with every number rounded to
-    `precision` but the time (the clock is the step count in float64, `clock`), derived quantities computed."""
-    full = np.empty(mujoco.mj_stateSize(model, STATE))
-    mujoco.mj_getState(model, data, full, STATE)
+def stored_state(rounded: mujoco.MjModel, data: mujoco.MjData, precision: str) -> mujoco.MjData:
+    """A new MjData of `rounded` (a `stored_model`) at `data`'s state (an MjData of the same model, rounded or not)
+    with every number rounded to `precision` but the time (the clock is the step count in float64, `clock`),
+    derived quantities computed."""
+    full = np.empty(mujoco.mj_stateSize(rounded, STATE))
+    mujoco.mj_getState(rounded, data, full, STATE)
     time = full[0]
     full = full.astype(np.dtype(precision)).astype(np.float64)
     full[0] = time
