@@ -88,8 +88,11 @@ class CEngine(Engine):
 
         from mujoco import rollout
 
+        from rigidbench import forces
+
         nbatch = len(states0)
-        nthread = min(nbatch, os.cpu_count() or 1)
+        forces.attach(model)
+        nthread = forces.threads_for(model, min(nbatch, os.cpu_count() or 1))
         datas = [mujoco.MjData(model) for _ in range(max(nthread, 1))]
         out = np.empty((nbatch, nstep, states0.shape[1]))
         kwargs = {} if control is None else {"control": control}
@@ -156,6 +159,9 @@ class WarpEngine(Engine):
         return f"mujoco-warp {version('mujoco-warp')}, warp-lang {version('warp-lang')}"
 
     def check(self, model: mujoco.MjModel) -> None:
+        from rigidbench import forces
+
+        forces.refuse_on(self.name, model)
         if not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONSTRAINT:  # only where a solver runs
             self._check_solver(model)
         self._model_on_device(model)
@@ -383,6 +389,9 @@ class MjxEngine(Engine):
         return jax
 
     def check(self, model: mujoco.MjModel) -> None:
+        from rigidbench import forces
+
+        forces.refuse_on(self.name, model)
         self._model_on_device(model)
 
     def _model_on_device(self, model: mujoco.MjModel):
@@ -549,8 +558,11 @@ class CWorlds(Worlds):
 
         from mujoco import batch
 
+        from rigidbench import forces
+
         self.model, self.nworld = model, int(nworld)
-        nthread = min(self.nworld, os.cpu_count() or 1) if nthread is None else int(nthread)
+        forces.attach(model)
+        nthread = forces.threads_for(model, min(self.nworld, os.cpu_count() or 1) if nthread is None else int(nthread))
         self._batch = batch.Batch(model, self.nworld, nthread=nthread)
         for name in ("qpos", "qvel", "time", "ctrl", "qfrc_applied", "xfrc_applied"):
             setattr(self, name, self._batch.bind(name))

@@ -23,6 +23,7 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
+from rigidbench import forces
 from rigidbench.engines import use as use_engine
 from rigidbench.params import Bound, Param, Range, Value, check_known
 from rigidbench.settings import DERIVED_TEXT, Settings, read_settings, skip_idle_stages
@@ -516,6 +517,7 @@ class Scenario:
             except ValueError as exc:  # MuJoCo's compiler errors
                 raise ValueError(f"scenario '{self.slug}': MuJoCo refused the model: {exc}") from None
         self.check_model(model)
+        forces.attach(model)  # the forces MuJoCo has no element for (rigidbench.forces), if the model declares any
         skip_idle_stages(model)
         engine = settings.engine_object() if settings is not None else None
         if engine is not None:

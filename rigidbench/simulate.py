@@ -114,9 +114,10 @@ def simulate(
     ValueError
         See `steps_for`; or if `control` has the wrong shape.
     """
-    from rigidbench import engines
+    from rigidbench import engines, forces
 
     nstep = steps_for(duration, model.opt.timestep)
+    forces.attach(model)
     state0 = get_state(model, data)
     kwargs = {}
     if control is not None:
@@ -222,9 +223,12 @@ def final_states(
         raise ValueError(f"states0 has {states0.shape[1]} columns, expected {mujoco.mj_stateSize(base, STATE)}")
     if models is not None and len(models) != len(states0):
         raise ValueError(f"{len(models)} models for {len(states0)} states")
-    from rigidbench import engines
+    from rigidbench import engines, forces
 
     nthread = (os.cpu_count() or 1) if nthread is None else int(nthread)
+    for m in models if models is not None else [base]:
+        if forces.attach(m):
+            nthread = forces.threads_for(m, nthread)
     datas = [mujoco.MjData(base) for _ in range(max(nthread, 1))]
     out = np.empty_like(states0)
     engine = engines.current()

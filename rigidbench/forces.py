@@ -1,0 +1,278 @@
+"""Forces MuJoCo has no element for, added inside its passive-force stage, so every stage of RK4 sees them.
+
+MuJoCo has no inverse-square force between bodies (no element, no first-party plugin), and a tendon or actuator
+force is at most affine in the length. The route kept here is MuJoCo's passive-force callback
+(``mjcb_passive``): `mj_passive` calls it inside every `mj_forward`, so RK4 evaluates the force at each of its
+four stages from the stage's own positions, and `mj_step`, `mujoco.rollout` and `mujoco.batch` all see it. A
+force written into ``xfrc_applied`` between steps from Python is instead held constant over each step, which makes
+any integrator first order in it (`tests/test_forces.py` measures both). A compiled plugin would avoid Python
+but needs a C toolchain and MuJoCo's headers at install time, which a pip install of this package must not.
+
+What the route costs (measured on this 2-core machine, `tests/test_forces.py` keeps the figures honest):
+
+- the callback is Python, so each `mj_forward` pays a Python call: about 9 us per RK4 stage for one pair;
+- it holds the GIL, so `mujoco.rollout` on several threads serialises on it (several times slower than one
+  thread): `threads_for` gives one thread to a model that declares a force here;
+- ``mjcb_passive`` is global to the process. It is installed only while a model declaring a force is alive
+  (`attach`, called where rigidbench compiles or steps a model) and removed with the last such model; while
+  installed, every other model's `mj_forward` pays a cheap lookup and returns. Another library's passive callback
+  is never overwritten: `attach` refuses, naming it.
+
+A model declares its forces in MJCF custom elements, so the model file carries its own physics::
+
+    <custom>
+      <!-- pairs of body names (2n names) and one strength k per pair (N m^2): the second body of a pair feels
+           F = k r / |r|^3, r from the first body's centre of mass to the second's; the first feels -F.
+           k > 0 repels (Coulomb, q1 q2 / (4 pi eps0)), k < 0 attracts (gravity, -G m1 m2). -->
+      <text name="rigidbench:inverse-square" data="target projectile"/>
+      <numeric name="rigidbench:inverse-square" data="1.0"/>
+    </custom>
+
+The batched engines (MuJoCo Warp, MJX) have no passive-force callback and refuse such a model before simulating
+(`refuse_on`).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import glob
+import os
+import threading
+import weakref
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+INVERSE_SQUARE = "rigidbench:inverse-square"
+
+
+@dataclass(frozen=True)
+class InverseSquare:
+    """The inverse-square pairs of a model: body ids ``first``, ``second`` and strengths ``k`` (N m^2).
+
+    ``free_dofs``: where every body of the pairs is a free body with its centre of mass at its origin and in one
+    pair only, the three translational dofs of each (``first``'s, then ``second``'s, flattened), where a force is
+    its own generalised force (one vectorised add, for Monte Carlo models with many pairs); None otherwise
+    (`mujoco.mj_applyFT` per body).
+    """
+
+    first: np.ndarray
+    second: np.ndarray
+    k: np.ndarray
+    free_dofs: tuple[np.ndarray, np.ndarray] | None = None
+
+    def forces(self, xipos: np.ndarray) -> np.ndarray:
+        """The force on each pair's second body (N, world frame), shape (npair, 3); the first feels minus it."""
+        r = xipos[self.second] - xipos[self.first]
+        dist = np.sqrt(np.einsum("ij,ij->i", r, r))
+        return (self.k / dist**3)[:, None] * r
+
+    def potential_energy(self, xipos: np.ndarray) -> float:
+        """sum of k / |r| over the pairs (J)."""
+        r = xipos[self.second] - xipos[self.first]
+        return float(np.sum(self.k / np.sqrt(np.einsum("ij,ij->i", r, r))))
+
+    def apply(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Add the pair forces, at each body's centre of mass, to ``data.qfrc_passive``."""
+        f = self.forces(data.xipos)
+        if self.free_dofs is not None:
+            a, b = self.free_dofs  # each dof once (`_free_dofs`), so a fancy-indexed add is exact
+            data.qfrc_passive[a] -= f.ravel()
+            data.qfrc_passive[b] += f.ravel()
+            return
+        zero = np.zeros(3)
+        for a, b, fb in zip(self.first, self.second, f, strict=True):
+            mujoco.mj_applyFT(model, data, fb, zero, data.xipos[b], int(b), data.qfrc_passive)
+            mujoco.mj_applyFT(model, data, -fb, zero, data.xipos[a], int(a), data.qfrc_passive)
+
+
+def _custom(model: mujoco.MjModel, obj: mujoco.mjtObj, name: str) -> int:
+    return mujoco.mj_name2id(model, obj, name)
+
+
+def inverse_square(model: mujoco.MjModel) -> InverseSquare | None:
+    """The model's inverse-square pairs, or None if it declares none.
+
+    Raises
+    ------
+    ValueError
+        If the declaration is malformed: an odd number of names, an unknown or world body, a pair of one body,
+        a strength count that differs from the pair count, or a zero or non-finite strength.
+    """
+    it = _custom(model, mujoco.mjtObj.mjOBJ_TEXT, INVERSE_SQUARE)
+    if it < 0:
+        return None
+    adr, size = model.text_adr[it], model.text_size[it]
+    names = bytes(model.text_data[adr : adr + size - 1]).decode().split()
+    if not names or len(names) % 2:
+        raise ValueError(f"custom text {INVERSE_SQUARE!r} must list pairs of body names, got {names}")
+    ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names])
+    for n, i in zip(names, ids, strict=True):
+        if i <= 0:
+            raise ValueError(f"custom text {INVERSE_SQUARE!r}: {n!r} is not a body of the model (or is the world)")
+    first, second = ids[0::2], ids[1::2]
+    if np.any(first == second):
+        raise ValueError(f"custom text {INVERSE_SQUARE!r}: a pair names one body twice")
+    inum = _custom(model, mujoco.mjtObj.mjOBJ_NUMERIC, INVERSE_SQUARE)
+    if inum < 0:
+        raise ValueError(f"custom numeric {INVERSE_SQUARE!r} (the strengths, N m^2) is missing")
+    adr, size = model.numeric_adr[inum], model.numeric_size[inum]
+    k = np.array(model.numeric_data[adr : adr + size], dtype=float)
+    if len(k) != len(first):
+        raise ValueError(f"custom numeric {INVERSE_SQUARE!r} has {len(k)} strengths for {len(first)} pairs")
+    if not np.all(np.isfinite(k)) or np.any(k == 0):
+        raise ValueError(f"custom numeric {INVERSE_SQUARE!r}: every strength must be finite and nonzero, got {k}")
+    return InverseSquare(first, second, k, _free_dofs(model, first, second))
+
+
+def _free_dofs(model: mujoco.MjModel, first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    def dof(body: int) -> int | None:
+        j = model.body_jntadr[body]
+        free = model.body_jntnum[body] == 1 and model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE
+        return int(model.jnt_dofadr[j]) if free and not np.any(model.body_ipos[body]) else None
+
+    if len(set(first) | set(second)) != 2 * len(first):
+        return None  # a body in several pairs: mj_applyFT accumulates
+    dofs = [[dof(b) for b in bodies] for bodies in (first, second)]
+    if any(d is None for ds in dofs for d in ds):
+        return None
+    return tuple((np.array(ds)[:, None] + np.arange(3)).ravel() for ds in dofs)
+
+
+# The force laws: each parses a model (None: the model declares none) into something with `apply(model, data)`.
+LAWS: dict[str, Callable[[mujoco.MjModel], object | None]] = {INVERSE_SQUARE: inverse_square}
+
+
+def declared(model: mujoco.MjModel) -> list[str]:
+    """The names of the force laws the model declares (custom elements named after a law)."""
+    return [
+        name
+        for name in LAWS
+        if _custom(model, mujoco.mjtObj.mjOBJ_TEXT, name) >= 0 or _custom(model, mujoco.mjtObj.mjOBJ_NUMERIC, name) >= 0
+    ]
+
+
+_LOCK = threading.Lock()
+_PARSED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # model -> its parsed laws (empty: none)
+_ATTACHED: weakref.WeakSet = weakref.WeakSet()  # the live models that keep the callback installed
+_KNOWN: set[int] = set()  # their addresses (the raw mjModel pointers MuJoCo passes to the callback)
+_CFUNC = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p)
+_TRAMPOLINE: list = [None]  # MuJoCo's own Python trampoline for `_passive`, called for the models in _KNOWN
+
+
+def _laws(model: mujoco.MjModel) -> list:
+    laws = _PARSED.get(model)
+    if laws is None:
+        laws = [parsed for parse in LAWS.values() if (parsed := parse(model)) is not None]
+        _PARSED[model] = laws
+    return laws
+
+
+def _passive(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+    """The Python side of the callback: add the model's declared forces."""
+    for law in _laws(model):
+        law.apply(model, data)
+
+
+def _filter(model_ptr: int, data_ptr: int) -> None:
+    """What MuJoCo calls (``mjcb_passive``): the declared models go on to `_passive`, every other returns at once.
+
+    MuJoCo's Python bindings hand a Python callable the Python objects of the raw model and data, and fail
+    (``Python exception raised``) on a model that has none yet, which is every model while MuJoCo compiles it
+    (the compiler runs `mj_forward` in `mj_setConst`). So the installed callback is this ctypes function, which
+    MuJoCo calls with raw pointers; only a model `attach` has seen reaches the bindings' own trampoline.
+    """
+    if model_ptr in _KNOWN:
+        _TRAMPOLINE[0](model_ptr, data_ptr)
+
+
+_FILTER = _CFUNC(_filter)
+
+
+@functools.cache
+def _slot() -> ctypes.c_void_p:
+    """MuJoCo's global ``mjcb_passive`` in the loaded libmujoco."""
+    here = os.path.dirname(mujoco.__file__)
+    paths = sorted(glob.glob(os.path.join(here, "libmujoco*")) + glob.glob(os.path.join(here, "mujoco.dll")))
+    if not paths:
+        raise RuntimeError(f"cannot find libmujoco beside {mujoco.__file__} (rigidbench.forces needs mjcb_passive)")
+    return ctypes.c_void_p.in_dll(ctypes.CDLL(paths[0]), "mjcb_passive")
+
+
+def _install() -> None:
+    mujoco.set_mjcb_passive(_passive)  # the bindings keep `_passive` and point mjcb_passive at their trampoline
+    slot = _slot()
+    _TRAMPOLINE[0] = _CFUNC(slot.value)
+    slot.value = ctypes.cast(_FILTER, ctypes.c_void_p).value
+
+
+def _release(address: int) -> None:
+    with _LOCK:
+        _KNOWN.discard(address)
+        if not _KNOWN and mujoco.get_mjcb_passive() is _passive:
+            mujoco.set_mjcb_passive(None)
+
+
+def attach(model: mujoco.MjModel) -> bool:
+    """Make sure MuJoCo adds the forces `model` declares whenever it is stepped, for as long as it is alive.
+
+    Parses the declaration (so a malformed one fails here, before simulating) and installs the passive callback
+    while any such model lives. Cheap and idempotent: call it wherever a model is compiled or stepped.
+
+    Returns
+    -------
+    bool
+        Whether the model declares a force here.
+
+    Raises
+    ------
+    ValueError
+        A malformed declaration (see `inverse_square`).
+    RuntimeError
+        If another passive-force callback is installed in this process (it is never overwritten).
+    """
+    if not declared(model):
+        return False
+    _laws(model)
+    with _LOCK:
+        if model in _ATTACHED:
+            return True
+        current = mujoco.get_mjcb_passive()
+        if current is not None and current is not _passive:
+            raise RuntimeError(
+                f"another passive-force callback ({current!r}) is installed; rigidbench's forces ({declared(model)}) "
+                "need mjcb_passive and never overwrite it"
+            )
+        if current is None:
+            _install()
+        _ATTACHED.add(model)
+        _KNOWN.add(model._address)
+        weakref.finalize(model, _release, model._address)
+    return True
+
+
+def threads_for(model: mujoco.MjModel, nthread: int) -> int:
+    """The threads to step `model` on: one where it declares a force (the Python callback holds the GIL, so more
+    threads only wait on each other), else `nthread`."""
+    return 1 if declared(model) else nthread
+
+
+def refuse_on(engine: str, model: mujoco.MjModel) -> None:
+    """Refuse a model with declared forces on an engine that has no passive-force callback.
+
+    Raises
+    ------
+    rigidbench.engines.EngineRefused
+        Naming the engine and the forces.
+    """
+    from rigidbench.engines import EngineRefused
+
+    laws = declared(model)
+    if laws:
+        raise EngineRefused(
+            f"engine {engine} has no passive-force callback, which the model's {', '.join(laws)} force needs "
+            "(rigidbench.forces; C MuJoCo runs it)"
+        )
