@@ -93,6 +93,8 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         self._k = np.zeros(self.num_envs, dtype=np.int64)
         self._every = np.ones(self.num_envs, dtype=bool)
         self._ready = False
+        # One copy on C MuJoCo: the template env steps itself (`_step_one`); no batch is built.
+        self._single = self.num_envs == 1 and self._engine is None
 
     # ---- the episode's configuration, from the template --------------------------------------------------------
 
@@ -100,6 +102,8 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         """Reset the template for the batch's configuration; its state, theory table and reset info."""
         env = self.env
         obs, info = env.reset(seed=seed, options=self._options)
+        if self._single:
+            return obs, info
         if self.worlds is None or self.worlds.model is not env.model:  # a new case or parameters: a new batch
             if self.worlds is not None:
                 self.worlds.close()
@@ -123,7 +127,8 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         self._options = dict(options or {})
         obs, info = self._start_episode(seed)
         ids = np.arange(self.num_envs)
-        self.worlds.load(ids, self._data0)
+        if not self._single:
+            self.worlds.load(ids, self._data0)
         self._k[:] = 0
         self._autoreset[:] = False
         self._ready = True
@@ -134,6 +139,8 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
     def step(self, actions):
         if not self._ready:
             raise RuntimeError("call reset() before step()")
+        if self._single:
+            return self._step_one(actions)
         env, worlds = self.env, self.worlds
         actions = self._checked(actions)
         restart = np.flatnonzero(self._autoreset)
@@ -166,6 +173,30 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
             self._restart(restart, obs, reward, terminated, truncated, infos)
         self._autoreset = terminated | truncated
         return obs, reward, terminated, truncated, infos
+
+    def _step_one(self, actions):
+        """One copy on C MuJoCo: the template env's own step (`ScenarioEnv.step`: one `mj_step` call for the frame
+        skip and the scalar hooks), its outputs as the batch's. A batch of one paid ~40-50 us of array work per step
+        for what the scalar hooks do in a few (docs/engines.md); the numbers are the same (the batch path's equal
+        the single env's bit for bit, `tests/test_vector.py`)."""
+        actions = np.asarray(actions)
+        shape = (1, *self.single_action_space.shape)
+        if actions.shape != shape:
+            raise ValueError(f"actions shape {actions.shape} != {shape}")
+        env = self.env
+        if self._autoreset[0]:  # gymnasium's next-step autoreset: the step is not taken, the episode starts again
+            obs, info = env.reset(options=self._options)
+            self._autoreset[0] = False
+            return obs[None], np.zeros(1), np.zeros(1, dtype=bool), np.zeros(1, dtype=bool), _put({}, info, _ONE, 1)
+        obs, reward, terminated, truncated, info = env.step(actions[0])
+        self._autoreset[0] = terminated or truncated
+        return (
+            obs[None],
+            np.array([reward], dtype=float),
+            np.array([terminated]),
+            np.array([truncated]),
+            _one(info),
+        )
 
     def _checked(self, actions) -> np.ndarray:
         actions = np.asarray(actions, dtype=np.float64)
@@ -227,6 +258,20 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
             self.worlds = None
         self._ready = False  # a step after close asks for a reset, which builds the batch again
         self.env.close()
+
+
+_ONE = np.zeros(1, dtype=np.int64)
+_TRUE = np.ones(1, dtype=bool)
+
+
+def _one(info: Mapping[str, Any]) -> dict[str, Any]:
+    """`_put` of a step's info (floats and bools, nested dicts of floats) into a batch of one: the same arrays and
+    masks, made directly (a mask is a copy of one: ``np.ones`` costs 4x ``ndarray.copy``)."""
+    out: dict[str, Any] = {}
+    for key, value in info.items():
+        out[key] = _one(value) if type(value) is dict else np.array((value,))
+        out["_" + key] = _TRUE.copy()
+    return out
 
 
 def _put(infos: dict[str, Any], info: Mapping[str, Any], ids: np.ndarray, n: int) -> dict[str, Any]:

@@ -6,6 +6,8 @@ their observations and rewards in arrays), which must equal the sync one bit for
 rewards, terminations, truncations and every number in ``info``, through autoresets and clipped actions.
 """
 
+import math
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -90,6 +92,18 @@ def test_batched_vector_env_equals_sync_bit_for_bit(validation_env_id):
     """Every validation env, 3 copies, 60 steps at 5x its frame skip (the fast envs end episodes and autoreset)."""
     frame_skip = 5 * env_classes()[validation_env_id].default_frame_skip
     _run_both(validation_env_id, 3, 60, frame_skip=frame_skip)
+
+
+@pytest.mark.parametrize(
+    "one_id", ["rigidbench/HeavyTop-v0", "rigidbench/StruckStick-v0", "rigidbench/SimplePendulum-v0"]
+)
+def test_one_copy_equals_sync_through_its_autoresets(one_id):
+    """N = 1 on C MuJoCo steps the template env itself (`VectorScenarioEnv._step_one`): the same outputs as a sync
+    vector env of one, through at least one episode end and its autoreset."""
+    env = gym.make(one_id).unwrapped
+    env.reset(seed=0)
+    frame_skip = math.ceil(env.episode_duration / env.model.opt.timestep / 25)  # an episode in 25 steps
+    assert _run_both(one_id, 1, 60, frame_skip=frame_skip) >= 2
 
 
 def test_batched_vector_env_autoresets_as_sync_does():
