@@ -342,7 +342,8 @@ class Scenario:
         from the origin), in units of the quantity. A quantity read from a coordinate that a steady motion advances
         every step is named in ``prediction["_roundoff_secular"]`` (its floor grows like the step count). A floor the
         scenario derives itself, proportional to the precision's eps, is ``prediction["_roundoff_eps"][name]`` in
-        units of eps, with ``prediction["_roundoff_eps_rule"]`` saying where it comes from (`_roundoff_check`).
+        units of eps (or, where it is not proportional, a function of eps giving the floor), with
+        ``prediction["_roundoff_eps_rule"]`` saying where it comes from (`_roundoff_check`).
         """
         check = self.check(name)
         given = prediction.get("_roundoff_scale", {}).get(name)
@@ -378,12 +379,14 @@ class Scenario:
         # A scenario that derives its own round-off floor as a multiple of the precision's eps (the float64 floor
         # its tolerance already carries, e.g. a torque computed from rounded world positions) has it scaled to the
         # engine's eps; the larger of the two floors counts.
+        # A floor that is not proportional to eps is given as a function of eps (absolute, in the check's units).
         per_eps = prediction.get("_roundoff_eps", {}).get(check.name)
         if per_eps is not None:
-            derived = float(per_eps) * float(np.finfo(np.dtype(precision)).eps)
+            eps = float(np.finfo(np.dtype(precision)).eps)
+            derived = float(per_eps(eps)) if callable(per_eps) else float(per_eps) * eps
             if derived > floor:
                 floor = derived
-                rule = f"the scenario's floor {float(per_eps):.3g} eps ({prediction['_roundoff_eps_rule']})"
+                rule = f"the scenario's floor {derived / eps:.3g} eps ({prediction['_roundoff_eps_rule']})"
         size = 1.0 if check.kind == "rel" or check.unit == "1" else abs(float(prediction[check.name]))
         unresolved = size > 0 and floor >= UNRESOLVED_FRACTION * size
         reason = f"{check.reason}; + {precision} round-off {rule} = {floor:.3g} (float64 tolerance {check.tolerance:g})"

@@ -298,6 +298,27 @@ def test_float32_positions_cost_a_stiff_contact_its_energy_within_the_contact_fl
     assert all(r["status"] == results.PASS for r in rows.values()), rows
 
 
+# A census draw (seed 1, to 3 digits) of a heavy projectile: m1/m2 = 2.4e3, u dt = 2.7e-6 m on a grid of ~eps x 0.1 m.
+HEAVY_PROJECTILE = {"m1": 1.13, "m2": 4.65e-4, "r1": 0.0566, "r2": 0.0482, "speed": 0.0134, "stiffness": 473.0}
+
+
+def test_float32_positions_quantise_a_heavy_projectiles_advance_within_its_floor(fake_engine):
+    """A heavy projectile keeps its speed through the contact, so float32 positions advance it a whole number of grid
+    steps each step: its effective speed is off by up to eps X / (2 u dt), 2.3e-3 here, and the collision's
+    restitution with it (the fake engine: 1.6e-3 off, 9x the penetration floor 10 eps a / delta). The contact floor
+    takes the larger of the two (`hard_spheres._contact_roundoff`), so the checks that float32 resolves pass."""
+    settings = Settings(engine="mjx")
+    overrides = {k: repr(v) for k, v in HEAVY_PROJECTILE.items()}
+    job = runner.plan(["hard-spheres:heavy-projectile-short"], overrides, settings)[0]
+    rows = {r["check"]: r for r in runner.run_job(job, settings)}
+    restitution = rows["restitution"]
+    assert restitution["error"] > 1e-3  # the quantised advance, far above the penetration floor's ~2e-4
+    assert "quantised advance" in restitution["tolerance_reason"]
+    assert {r["status"] for r in rows.values()} <= {results.PASS, results.UNRESOLVED}, {
+        k: (r["status"], r["error"], r["tolerance"]) for k, r in rows.items()
+    }
+
+
 def test_an_env_stored_in_float32_predicts_from_the_rounded_body_and_keeps_its_model_across_resets():
     """What a batched vector env on a float32 engine does to its template (`envs/vector.py`): the model and the
     initial state as that engine stores them, the theory from those; one model per configuration, so the engine's
