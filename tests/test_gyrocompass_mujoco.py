@@ -104,8 +104,9 @@ def test_a_rotor_that_is_not_axisymmetric_is_refused():
 
 
 def test_north_seeking_domain_refuses_a_rotor_too_slow_for_the_platform():
-    """The domain's test on a parameter set outside the printed ranges (inside them, I_a >= I_t keeps H / (I_t
-    Omega_perp) >= spin_rate / Omega >= 2): H < I_t Omega_perp has no hunting about North."""
+    """H < I_t Omega_perp has no hunting about North. Inside the printed ranges (I_a >= I_t, spin_rate >= 10 rad/s,
+    Omega <= 5 rad/s) only the corner of the slowest spin, the fastest platform and a release near South comes
+    close; here a slow spin released at 2.5 rad makes H negative."""
     p = {**SCENARIO.resolve(SCENARIO.case(None)), "spin_rate": 1.0, "Omega": 5.0, "latitude": 0.0, "amplitude": 2.5}
     assert "H = " in env_mod._north_seeking(p)
     assert env_mod._north_seeking(SCENARIO.resolve(SCENARIO.case(None))) is None
