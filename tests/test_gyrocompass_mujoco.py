@@ -10,6 +10,7 @@ import pytest
 
 from rigidbench import registry
 from rigidbench.envs import gyrocompass as env_mod
+from rigidbench.scenario import OutsideDomain
 from rigidbench.settings import Settings
 
 SCENARIO = registry.get("gyrocompass")
@@ -123,3 +124,30 @@ def test_mujoco_default_euler_loses_H_at_first_order_in_the_step():
         growth.append(by_name["turning-angle"].error)
     assert drifts[0] / drifts[1] == pytest.approx(2, rel=0.05)
     assert growth[0] / growth[1] == pytest.approx(2, rel=0.05)
+
+
+# A census draw (seed 3, index 1): a 405 rad/s spin against a platform's horizontal rate of 3.5e-4 rad/s, released
+# 1e-4 rad from North: rho = eps chi' / (Omega_perp sin a) = 2.4e-6.
+FAST_SPIN_SLOW_PLATFORM = {
+    "Omega": 0.003117,
+    "latitude": 1.456,
+    "spin_rate": 404.8,
+    "amplitude": 1.038e-4,
+    "I_transverse": 5.061,
+    "I_axial": 10.1,
+    "I_gimbal": 2.192e-4,
+}
+
+
+def test_gyroscopic_round_off_is_carried_by_the_tolerances_and_refused_beyond_its_domain():
+    """MuJoCo's world-frame gyroscopic torque rounds to ~eps I chi'^2: at rho = 2.4e-6 the turning angle is off by
+    ~1e-8, a thousand times RK4's error, and the tolerances' floor ~rho covers it; at rho > 1e-5 the set is refused."""
+    run = SCENARIO.run("large-hunting", FAST_SPIN_SLOW_PLATFORM, keep_trajectory=True)
+    assert run.prediction["_rho"] == pytest.approx(2.4e-6, rel=0.05)
+    turning = next(o for o in run.outcomes if o.check.name == "turning-angle")
+    assert turning.error > 1e-9  # round-off, not RK4 (~1e-11 at the derived step)
+    assert all(o.passed for o in run.outcomes)
+    with pytest.raises(OutsideDomain, match="gyroscopic-round-off"):
+        SCENARIO.resolve(
+            SCENARIO.case("small-hunting"), {"Omega": 1e-3, "latitude": 1.5, "spin_rate": 1e4, "amplitude": 1e-4}
+        )
