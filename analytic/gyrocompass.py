@@ -179,7 +179,13 @@ class Gyrocompass:
         return float((self.A - 4 * self.B) / (self.A - self.B) * amplitude**2 / 16)
 
     def azimuth(self, t: np.ndarray, azimuth0: float, rate0: float = 0.0) -> np.ndarray:
-        """alpha(t) (rad) of the exact hunting equation from alpha(0) = `azimuth0`, alpha'(0) = `rate0`.
+        """alpha(t) (rad) of the exact hunting equation from alpha(0) = `azimuth0`, alpha'(0) = `rate0`
+        (`trajectory`)."""
+        return self.trajectory(t, azimuth0, rate0)[0]
+
+    def trajectory(self, t: np.ndarray, azimuth0: float, rate0: float = 0.0) -> np.ndarray:
+        """(alpha(t), alpha'(t)) (rad, rad/s), shape (2, len(t)), of the exact hunting equation from alpha(0) =
+        `azimuth0`, alpha'(0) = `rate0`.
 
         Integrated with scipy's DOP853 at rtol = atol = 1e-12 of the amplitude: the equation has no closed form in
         elementary functions once B != 0; this is the theory's trajectory, not a simulation of the rigid bodies.
@@ -188,7 +194,7 @@ class Gyrocompass:
         scale = max(abs(azimuth0), abs(rate0) / self.hunting_frequency, 1e-300)
         end = float(t.max()) if t.size else 0.0
         if end <= 0:
-            return np.full(t.shape, float(azimuth0))
+            return np.stack([np.full(t.shape, float(azimuth0)), np.full(t.shape, float(rate0))])
         sol = integrate.solve_ivp(
             lambda _t, y: [y[1], float(self.acceleration(y[0]))],
             (0.0, end),
@@ -198,7 +204,35 @@ class Gyrocompass:
             atol=1e-12 * scale,
             dense_output=True,
         )
-        return sol.sol(t)[0]
+        return sol.sol(t)
+
+
+def momentum_along_axis(
+    inertia_transverse: float,
+    inertia_gimbal: float,
+    momentum: float,
+    omega: float,
+    latitude: float,
+    azimuth: np.ndarray,
+    rate: np.ndarray,
+) -> np.ndarray:
+    """The gimbal's and rotor's angular momentum (kg m^2/s) along the platform's axis n, about the gimbal centre.
+
+    ``H cos(lat) cos(alpha) + I_t Omega (1 - cos^2(lat) cos^2(alpha)) + I_g Omega - (I_t + I_g) alpha' sin(lat)``:
+    the rotor's axial part H e.n, its transverse moment I_t times its angular velocity less the axial part along n,
+    and the isotropic gimbal's I_g times its angular velocity along n (the gimbal turns at alpha' about -up, which
+    has -sin(lat) along n). The platform's axis is a frictionless hinge: the platform's moment I_p times its rate
+    plus this is conserved, so the platform's rate moves by minus the change of this over I_p.
+    """
+    azimuth, rate = np.asarray(azimuth, dtype=float), np.asarray(rate, dtype=float)
+    cl, sl = np.cos(latitude), np.sin(latitude)
+    c = np.cos(azimuth)
+    return (
+        momentum * cl * c
+        + inertia_transverse * omega * (1 - cl * cl * c * c)
+        + inertia_gimbal * omega
+        - (inertia_transverse + inertia_gimbal) * rate * sl
+    )
 
 
 def platform_momentum_swing(

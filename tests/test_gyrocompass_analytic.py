@@ -174,9 +174,10 @@ def test_a_rotor_too_slow_for_the_platform_has_no_north_seeking_equilibrium():
         _compass().turning_angle(3.0, 40.0)
 
 
-def test_platform_momentum_swing_bounds_the_gyros_momentum_along_the_axis():
-    """The bound against the gyro's angular momentum along n computed from the rotation matrices along the hunting:
-    never below it, and not loose by more than the signed terms it adds (at most a factor 1.3 here)."""
+def test_momentum_along_the_axis_and_its_swing_bound_match_the_rotation_matrices():
+    """The gyro's angular momentum along n, closed form against the one computed from rotation matrices along the
+    hunting; and the swing bound: never below the swing, and not loose by more than the signed terms it adds (at
+    most a factor 1.3 here)."""
     compass = _compass()
     for amplitude in (0.5, 2.5):
         t = np.linspace(0, compass.period(amplitude), 4001)
@@ -197,7 +198,10 @@ def test_platform_momentum_swing_bounds_the_gyros_momentum_along_the_axis():
             r_g, w_g, r_r, w_r = _bodies([a, 0.0], [ad, cd], ti)
             momentum = r_g @ np.diag([I_G] * 3) @ r_g.T @ w_g + r_r @ np.diag([I_T, I_A, I_T]) @ r_r.T @ w_r
             along.append(momentum @ N_AXIS)
-        swing = np.max(np.abs(np.array(along) - along[0]))
+        along = np.array(along)
+        exact = gc.momentum_along_axis(I_T, I_G, compass.spin_momentum, OMEGA, LAT, alpha, alpha_dot)
+        assert exact == pytest.approx(along, rel=1e-13, abs=1e-13 * np.abs(along).max())
+        swing = np.max(np.abs(along - along[0]))
         bound = gc.platform_momentum_swing(
             I_T, I_G, compass.spin_momentum, OMEGA, LAT, amplitude, compass.max_rate(amplitude)
         )
