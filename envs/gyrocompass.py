@@ -431,6 +431,15 @@ class GyroCompass(Scenario):
             "momentum-drift": 0.0,
             "platform-drift": predicted_drift,
             "_rho": rho,
+            # The same floors on a float32 engine (`Scenario._roundoff_check`): rho is eps times chi' / (Omega_perp
+            # sin a), so each floor in units of the precision's eps.
+            "_roundoff_eps": {
+                name: gain_ * rho / eps * (amplitude if name == "mean-azimuth" else 1.0)
+                for name, gain_ in ROUNDOFF_GAINS.items()
+            },
+            "_roundoff_eps_rule": "gain x rho, rho = eps chi' / (Omega cos(lat) sin(min(|a|, pi/2))): the gyroscopic "
+            "torque's round-off against the restoring torque, proportional to the precision's eps; the gains are "
+            "the float64 floors'",
             "_tolerance": {
                 "hunting-period": self.check("hunting-period").tolerance + period_drift + floor["hunting-period"],
                 "small-amplitude-period": 2 * beyond
