@@ -12,11 +12,12 @@ Three choices make the model the textbook one:
   equality or a spring, so THEORY.md G1's compliance note (an effective inertia I_t + I_g + H^2/K) does not apply:
   there is no K.
 - The platform's rate stays constant because its moment of inertia I_p is huge. Its axis is a frictionless hinge, so
-  the angular momentum along n is conserved and the gyro's share of it, which swings by at most S over the hunting
-  (`analytic.gyrocompass.platform_momentum_swing`), moves the platform's rate by at most S / I_p. I_p follows the
-  parameters (`GyroCompass.reference_settings`): S / (Omega PLATFORM_DRIFT) A / (A - B), so the rate moves by at
-  most PLATFORM_DRIFT = 1e-10 of itself, and the hunting frequency by at most that. The check ``platform-drift``
-  measures it, and every period tolerance carries it.
+  I_p Omega + L_n is conserved, L_n the gyro's angular momentum along n (`analytic.gyrocompass.momentum_along_axis`);
+  L_n swings by at most S over the hunting (`analytic.gyrocompass.platform_momentum_swing`), which moves the rate by
+  at most S / I_p, and the platform's turning back as the gimbal turns lightens I_t + I_g by (I_t + I_g)
+  sin^2(lat) / I_p. I_p follows the parameters (`GyroCompass.reference_settings`): max(S A / ((A - B) Omega d),
+  (I_t + I_g) / d), d = PLATFORM_DRIFT = 1e-10, so both effects stay below 1e-10; every period tolerance carries
+  both bounds, and the check ``platform-drift`` predicts the drift from the balance along the theory's trajectory.
 - Every centre of mass is at the gimbal centre on the platform's axis: gravity exerts no torque and does no work,
   and is set to zero (a compass a radius off the Earth's axis sees a uniform acceleration of its pivot, which
   exerts no torque about a CoM at the pivot either).
@@ -69,7 +70,7 @@ ROUNDOFF_MAX = 1e-5
 ROUNDOFF = (
     "; + {gain:g} rho, rho = eps chi' / (Omega cos(lat) sin(min(|a|, pi/2))) the relative round-off of MuJoCo's "
     "world-frame gyroscopic torque against the restoring one (measured error / rho <= {measured:g} over 120 census "
-    "draws; rho ~ 3e-13 at the default case)"
+    "draws; rho = 6.3e-11 .. 3e-13 in the cases)"
 )
 RUN_PERIODS = 4.25  # released at a turning point: 4.25 periods hold 17 zero crossings, 4 whole periods of each sign
 
