@@ -246,7 +246,33 @@ def _axle_inertia(p: Mapping[str, Any]) -> str | None:
     return None
 
 
+# MuJoCo's compiler marks a body's inertial frame as the body's own (``body_sameframe``) when every coordinate of its
+# position is below 1e-6 m and every quaternion component within 1e-6 of the body's, and the engine then simulates
+# with the body's frame: the offset or the turn is dropped, though ``body_ipos`` and ``body_iquat`` keep it (measured:
+# tilt 1.76e-6 rad, quaternion x = 8.8e-7, gives ximat = identity and a bearing torque missing its -omega^2 I_yz part,
+# 8.8e-5 rad off in direction; ipos (9e-7, 0, 0) m gives xipos = 0). Refused with a factor 2 of margin.
+SAMEFRAME = 1e-6
+
+
+def _sameframe(p: Mapping[str, Any]) -> str | None:
+    tilt, radial, axial = float(p["tilt"]), float(p["com_radial"]), float(p["com_axial"])
+    if tilt != 0 and abs(math.sin(tilt / 2)) < 2 * SAMEFRAME:
+        return f"tilt = {tilt:.10g} rad (quaternion component sin(tilt/2) = {math.sin(tilt / 2):.3g})"
+    if (radial, axial) != (0.0, 0.0) and max(abs(radial), abs(axial)) < 2 * SAMEFRAME:
+        return f"com_radial = {radial:.10g} m, com_axial = {axial:.10g} m"
+    return None
+
+
 DOMAINS = (
+    Domain(
+        "mujoco-sameframe",
+        "R8 (MuJoCo: body_sameframe)",
+        "tilt = 0 or |sin(tilt/2)| >= 2e-6 (|tilt| >= 4e-6 rad), and the CoM at O or max(|com_radial|, |com_axial|) "
+        ">= 2e-6 m: MuJoCo's compiler takes an inertial frame within 1e-6 of the body's (each quaternion component, "
+        "each coordinate in m) for the body's own (body_sameframe) and simulates with it, dropping the tilt or the "
+        "offset that body_iquat and body_ipos still hold (an engine limit)",
+        _sameframe,
+    ),
     Domain(
         "resolvable-torque",
         "R8 (the torque's size against its round-off)",
