@@ -81,6 +81,7 @@ def bent_axle(ctx: PlotContext) -> list[Figure]:
         ax.set_yscale("log")
         ax.set_ylim(1e-18, 10)
         ax.set_xticks(positions, labels, fontsize=8)
+        ax.set_xlabel("case and quantity")
         ax.set_ylabel("reaction in units of its scale")
         ax.set_title(f"bent-axle: torque and force of every case ({settings_text(runs[0][1])})", fontsize=10)
         ax.legend(fontsize=8, loc="upper right", frameon=False)
