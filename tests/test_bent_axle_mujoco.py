@@ -178,3 +178,20 @@ def test_the_predicted_inertia_is_read_back_from_the_compiled_model():
     rotation = ba.tilted_principal_frame(SCENARIO.read_params(model)["tilt"])
     expected = ba.inertia_about_point(float(b.mass[0]), b.inertia, rotation, b.ipos)
     np.testing.assert_allclose(axle.inertia_O, expected, rtol=0, atol=4 * EPS * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("integrator", ["RK4", "Euler"])
+def test_sensordata_after_mj_step_belongs_to_the_state_before_it(integrator):
+    """mj_step computes the sensors at the state it starts from (RK4's later stages skip them): after a step,
+    sensordata is one step stale until mj_forward. The scenario and the env call mj_forward first."""
+    prep = SCENARIO.prepare("tilted-disc")
+    model, data = prep.model, prep.data
+    model.opt.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{integrator.upper()}")
+    data.qfrc_applied[0] = 0.01  # a drive, so the torque changes from step to step (at constant rate it does not)
+    mujoco.mj_forward(model, data)
+    at_start = data.sensordata.copy()
+    mujoco.mj_step(model, data)
+    stale = data.sensordata.copy()
+    mujoco.mj_forward(model, data)
+    np.testing.assert_array_equal(stale, at_start)
+    assert np.abs(data.sensordata - stale).max() > 1e-4 * np.abs(stale).max()
