@@ -506,6 +506,11 @@ class BentAxle(Scenario):
             "force-direction": 0.0,
             "residual-force": 0.0,
             "axle-rate": axle.omega,
+            # On a float32 engine the rotor's angle, advanced every step, carries the run's round-off (secular: each
+            # step's sum rounded to half an ulp of |theta| <= 2 pi TURNS rad), and the directions and the torque's
+            # rotation rate read it (`Scenario.roundoff_scale`); the sensors are evaluated in float64.
+            "_roundoff_secular": ("torque-direction", "force-direction", "torque-rate"),
+            "_roundoff_scale": {"torque-direction": 2 * math.pi * TURNS, "force-direction": 2 * math.pi * TURNS},
         }
 
     def duration(self, prediction: Mapping[str, Any]) -> float:
