@@ -40,7 +40,6 @@ from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.settings import round_step
 from rigidbench.simulate import STATE, Trajectory, simulate
 
-EPS = float(np.finfo(float).eps)
 # Samples per turn of the reference run: the trajectory is exact at any step (theta'' = 0), so the step only sets
 # how densely the turning torque is sampled; 200 a turn (0.031 rad a step) draws it smoothly. Rounded down to one
 # digit (`round_step`): 1e-3 s at the default omega = 20 rad/s.
