@@ -81,7 +81,8 @@ CHECKS = (
         1 - ALPHA,
         "abs",
         _GOF + "; bins equal in psi over [0, psi_max]; angles past psi_max by <= tan(psi_max) (1 + x) 1e-5 / 2 "
-        "(the shift of the limit by a 1e-5 energy error; 7e-6 rad at x = 3) count in the top bin",
+        "(the shift of the limit by a 1e-5 energy error; 7e-6 rad at x = 3; on float32, by the positions' "
+        "rounding's energy floor instead, `precision_floor`) count in the top bin",
         "C6: sigma_lab(psi) = sum over branches sigma_CM (x cos psi +- s)^2 / s, eqs 9.62, 9.64; p-value",
     ),
     Check(
@@ -205,7 +206,26 @@ def tally_block(shard: BeamShard) -> tuple[Tally, tuple[np.ndarray, np.ndarray, 
         states, diverged = final_states(model, states0, shard.nstep, nthread=nthread)
     qpos = states[:, 1 : 1 + model.nq]
     qvel = states[:, 1 + model.nq : 1 + model.nq + model.nv]
-    return tally(model, qpos, qvel, diverged), ((qpos, qvel, impact) if shard.keep else None)
+    floor = precision_floor(model, data, shard.engine.precision if shard.engine is not None else "float64")
+    return tally(model, qpos, qvel, diverged, floor), ((qpos, qvel, impact) if shard.keep else None)
+
+
+def precision_floor(model: mujoco.MjModel, data: mujoco.MjData, precision: str) -> float:
+    """The relative energy error that positions stored in `precision` put into the collisions that reach the
+    projectile's kinematic limit, at b0 (`hard_spheres.contact_floor`: the penetration's rounding, or a steady
+    heavy projectile's quantised advance); 0 on float64, where RK4's `ENERGY_BUDGET` stands."""
+    m1, m2, a = HardSpheres._geometry(model)
+    if precision == "float64" or m1 <= m2:
+        return 0.0
+    from rigidbench.envs.hard_spheres import contact_floor
+
+    state = HardSpheres._state(model, data.qpos, data.qvel)
+    speed = float(np.linalg.norm(state["v1"]))
+    b0 = scattering.critical_impact_parameter(a, m1 / m2)
+    depth = speed * np.sqrt(1.0 - (b0 / a) ** 2) / np.sqrt(HardSpheres()._spring(model).stiffness)
+    extent = max(float(np.abs(state["x1"]).max()), float(np.abs(state["x2"]).max()) + a)
+    steady = (speed * model.opt.timestep, extent, 2 * m2 / (m1 + m2))
+    return contact_floor(float(np.finfo(np.dtype(precision)).eps), a, depth, steady)
 
 
 def _worker_threads() -> int | None:
@@ -218,25 +238,29 @@ def _worker_threads() -> int | None:
         return None
 
 
-def distribution_bins(model: mujoco.MjModel) -> dict[str, tuple[np.ndarray, float]]:
-    """Each distribution's test bins and slack (`goodness_of_fit`), from the model's masses and contact."""
+def distribution_bins(model: mujoco.MjModel, energy_floor: float = 0.0) -> dict[str, tuple[np.ndarray, float]]:
+    """Each distribution's test bins and slack (`goodness_of_fit`), from the model's masses and contact, and the
+    engine precision's energy floor (`precision_floor`)."""
     m1, m2, _ = HardSpheres._geometry(model)
     x = m1 / m2
     psi_top = scattering.max_lab_angle(x) if x > 1 else (np.pi / 2 if x == 1 else np.pi)
     steps = HardSpheres()._contact_time(model) / model.opt.timestep
     return {
         "cm": (np.linspace(-1.0, 1.0, NBINS + 1), 0.0),
-        "projectile": (np.linspace(0.0, psi_top, NBINS + 1), limit_slack(psi_top, x, steps)),
+        "projectile": (np.linspace(0.0, psi_top, NBINS + 1), limit_slack(psi_top, x, steps, energy_floor)),
         "target": (np.linspace(0.0, np.pi / 2, NBINS + 1), 0.0),
     }
 
 
-def tally(model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray, diverged: np.ndarray) -> Tally:
-    """Count a batch of finished collisions (final states) into the tests' bins."""
+def tally(
+    model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray, diverged: np.ndarray, energy_floor: float = 0.0
+) -> Tally:
+    """Count a batch of finished collisions (final states) into the tests' bins (their slack from `energy_floor`,
+    the engine precision's, `precision_floor`)."""
     out = HardSpheres().outgoing(model, qpos, qvel, np.array([1.0, 0.0, 0.0]))  # beam along +x
     hit = np.linalg.norm(out["v2"], axis=1) > 0
     samples = {"cm": np.cos(out["theta"][hit]), "projectile": out["psi"][hit], "target": out["zeta"][hit]}
-    bins = distribution_bins(model)
+    bins = distribution_bins(model, energy_floor)
     counts = {k: bin_counts(samples[k], *bins[k]) for k in DISTRIBUTIONS}
     return Tally(len(qpos), int(np.count_nonzero(hit)), int(np.count_nonzero(diverged)), counts)
 
@@ -431,7 +455,7 @@ class CrossSection(Scenario):
         }
 
 
-def limit_slack(psi_limit: float, x: float, contact_steps: float = BUDGET_STEPS) -> float:
+def limit_slack(psi_limit: float, x: float, contact_steps: float = BUDGET_STEPS, energy_floor: float = 0.0) -> float:
     """How far (rad) simulated LAB angles of the projectile may pass the kinematic limit `psi_limit`, psi_max =
     arcsin(1/x) for x = m1/m2 > 1; 0 otherwise.
 
@@ -441,7 +465,8 @@ def limit_slack(psi_limit: float, x: float, contact_steps: float = BUDGET_STEPS)
     to matter anywhere else puts them beyond it: measured up to 59 of 2e4 hits beyond psi_max by up to 2.4e-6 rad
     (x = 3, k = 1e8 to 1e11, 20 to 80 RK4 steps per contact, energy errors <= 8e-6). `ENERGY_BUDGET` bounds eps
     at 20 steps per contact, and (20 / contact_steps)^4 times it at fewer (RK4's order); a contact of a fractional
-    number of steps switches mid-step, a first-order error bounded by `SWITCHING_BUDGET` / contact_steps.
+    number of steps switches mid-step, a first-order error bounded by `SWITCHING_BUDGET` / contact_steps. On a
+    float32 engine the positions' rounding bounds it instead where larger (`energy_floor`, `precision_floor`).
     Equal masses (limit pi/2, reached head-on, where the projectile stops) and x < 1 (range up to pi) get none:
     no sample has passed pi/2 in any run so far, and one that does fails the test.
     """
@@ -450,6 +475,7 @@ def limit_slack(psi_limit: float, x: float, contact_steps: float = BUDGET_STEPS)
     budget = ENERGY_BUDGET * max(1.0, (BUDGET_STEPS / contact_steps) ** 4)
     if abs(contact_steps - round(contact_steps)) > 1e-6:  # the contact switches mid-step: first order
         budget = max(budget, SWITCHING_BUDGET / contact_steps)
+    budget = max(budget, energy_floor)
     return float(np.tan(psi_limit) * (1 + x) * budget / 2)
 
 

@@ -73,6 +73,21 @@ CONTACT_ROUNDOFF_RULE = (
 )
 
 
+def contact_floor(eps: float, a: float, depth: float, steady: tuple[float, float, float]) -> float:
+    """The relative error (of the impulse, the energy, the speeds) that positions rounded to `eps` put into an
+    elastic contact (`CONTACT_ROUNDOFF_RULE`): the larger of the penetration's C eps a / `depth` and the steady
+    projectile's quantised advance (``steady = (u dt, X, 2 m2 / (m1 + m2))``, see `_contact_roundoff`)."""
+    from rigidbench.engines import ROUNDOFF_FACTOR
+
+    advance, extent, share = steady
+    quantised = 0.0
+    if advance > 0:
+        grid_steps = advance / (eps * extent)
+        sweep = share * grid_steps
+        quantised = 0.5 / grid_steps * min(1.0, 1.0 / sweep) if sweep > 0 else 0.5 / grid_steps
+    return max(ROUNDOFF_FACTOR * eps * a / depth, quantised)
+
+
 def _contact_roundoff(
     a: float, depth: float, prediction: Mapping[str, Any], *, steady: tuple[float, float, float]
 ) -> dict[str, Any]:
@@ -92,18 +107,9 @@ def _contact_roundoff(
       the mechanism MJX's contact loss was traced to): m1/m2 = 2.4e3, u dt = 2.7e-6 m, X = 0.1 m: restitution
       1.63e-3 off against this floor's 2.33e-3; m1/m2 = 6.4e11 (the MJX census miss): 5.5e-3 against 8.6e-3.
     """
-    from rigidbench.engines import ROUNDOFF_FACTOR
-
-    gain = ROUNDOFF_FACTOR * a / depth
-    advance, extent, share = steady
 
     def floor(eps: float, scale: float) -> float:
-        quantised = 0.0
-        if advance > 0:
-            grid_steps = advance / (eps * extent)
-            sweep = share * grid_steps
-            quantised = 0.5 / grid_steps * min(1.0, 1.0 / sweep) if sweep > 0 else 0.5 / grid_steps
-        return scale * max(gain * eps, quantised)
+        return scale * contact_floor(eps, a, depth, steady)
 
     # Every check but the momentum (exact pairwise forces: the random walk's floor) is read from the impulse.
     scales = {c.name: 1.0 for c in CHECKS if c.name not in ("momentum", "opening-angle", "soft-shift-exponent")}

@@ -319,6 +319,27 @@ def test_float32_positions_quantise_a_heavy_projectiles_advance_within_its_floor
     }
 
 
+def test_float32_moves_the_heavy_projectiles_kinematic_limit_within_its_precision_floor(fake_engine):
+    """A heavy projectile's LAB angles pile up at psi_max = arcsin(m2/m1), so an energy error pushes some past it:
+    float64's RK4 budget allows 7e-6 rad there, and float32 storage of the positions puts up to 1.3e-4 rad (energy
+    errors up to 7.9e-4). The slack follows the precision's contact floor (`cross_section.precision_floor`), so the
+    distribution test passes on float32 (p = 0 with float64's slack), and float64's slack is unchanged."""
+    from rigidbench.envs import cross_section as cs
+
+    prepared = registry.get("cross-section").prepare("heavy-projectile")
+    floor = cs.precision_floor(prepared.model, prepared.data, "float32")
+    assert cs.precision_floor(prepared.model, prepared.data, "float64") == 0.0
+    slack32 = cs.distribution_bins(prepared.model, floor)["projectile"][1]
+    slack64 = cs.distribution_bins(prepared.model)["projectile"][1]
+    assert slack64 < 1e-5 < 1e-3 < slack32 < 0.02
+    settings = Settings(engine="mjx")
+    rows = {
+        r["check"]: r
+        for r in runner.run_job(runner.plan(["cross-section:heavy-projectile"], None, settings)[0], settings)
+    }
+    assert rows["projectile-distribution-pvalue"]["status"] == results.PASS, rows["projectile-distribution-pvalue"]
+
+
 def test_an_env_stored_in_float32_predicts_from_the_rounded_body_and_keeps_its_model_across_resets():
     """What a batched vector env on a float32 engine does to its template (`envs/vector.py`): the model and the
     initial state as that engine stores them, the theory from those; one model per configuration, so the engine's
