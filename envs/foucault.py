@@ -24,6 +24,7 @@ import mujoco
 import numpy as np
 
 from rigidbench import signals
+from rigidbench.analytic import oscillations as osc
 from rigidbench.analytic import rotating as rot
 from rigidbench.envs import rotating
 from rigidbench.envs.base import ScenarioEnv
@@ -81,6 +82,17 @@ CHECKS = (
         f"{EQUATOR_LEAN:g} rad from the platform's vertical would cause, Omega x {EQUATOR_LEAN:g} (round-off is "
         f"~1e-17 rad/s); azimuth fitted over {EQUATOR_PERIODS} periods",
         "N2 at lambda = 0: Omega sin(lambda) = 0, no precession",
+    ),
+    Check(
+        "swing-period",
+        "s",
+        1e-7,
+        "rel",
+        "on the equator Omega is horizontal: for an East-West swing the Coriolis force (perpendicular to the velocity "
+        "in the swing's plane) and the centrifugal force (Omega^2 r, r perpendicular to Omega) are both along the rod, "
+        "so the swing is an exact planar pendulum. Tolerance: RK4's frequency error 10 (omega0 dt)^4/120 (8e-8 at 200 "
+        "steps a period); the turning points are cubic-interpolated (O(dt^4)) and averaged over the run",
+        "O1 with O2 (the bob's 1e-9 kg m^2): T = 4 sqrt(l_eq/g) K(sin(a/2)), unchanged by the rotation on the equator",
     ),
     Check("platform-rate", "1", 1.6e-11, "abs", _PLATFORM, "N1 with Omega' = 0: the platform turns at a constant rate"),
 )
@@ -179,7 +191,7 @@ class Foucault(Scenario):
             "equator",
             "the equator, an East-West swing: Omega is horizontal and the plane does not turn",
             {"latitude": 0.0, "azimuth": 0.0},
-            ("equator-precession", "platform-rate"),
+            ("equator-precession", "swing-period", "platform-rate"),
             ranges={"latitude": Range(0.0, 0.0), "azimuth": Range(0.0, 0.0)},
             regime="lambda = 0 exactly, released East-West: the plane of swing is then invariant by symmetry",
         ),
@@ -240,6 +252,7 @@ class Foucault(Scenario):
             tolerance["precession-rate"] = rot.precession_tolerance(terms) + drift + rk4
         else:
             tolerance["equator-precession"] = abs(pl.rate) * EQUATOR_LEAN
+            tolerance["swing-period"] = 10 * (omega0 * dt) ** 4 / 120  # RK4 frequency error x 10
         return {
             "_length": length,
             "_omega0": omega0,
@@ -259,6 +272,7 @@ class Foucault(Scenario):
             "_tolerance": tolerance,
             "precession-rate": expected,
             "equator-precession": 0.0,
+            "swing-period": osc.pendulum_period(inertia_pivot / (mass * length), pl.g, amplitude),
             "platform-rate": 0.0,
         }
 
@@ -300,7 +314,9 @@ class Foucault(Scenario):
             if back.size:
                 rate = sense * math.pi / float(back[0])
         spin = rotating.spin_rate(model, traj.qvel)
+        tips = times[1:]  # the turning points after the release: two a period
         return {
+            "swing-period": 2 * signals.mean_spacing(tips),
             "precession-rate": rate,
             "equator-precession": slope,
             "platform-rate": float(np.max(np.abs(spin / spin[0] - 1))),

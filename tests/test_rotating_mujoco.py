@@ -213,3 +213,12 @@ def test_sets_outside_the_theorys_domain_are_refused_naming_the_parameter(slug, 
         scenario.resolve(scenario.case(case), params)
     if name == "latitude" or name == "azimuth":
         assert isinstance(exc.value, OutsideDomain)
+
+
+def test_an_east_west_swing_on_the_equator_is_an_exact_planar_pendulum(foucault_runs):
+    """Coriolis and centrifugal forces of an East-West swing on the equator lie along the rod: the period is O1's
+    exactly, MuJoCo missing it by RK4's own frequency error (omega0 dt)^4/120 and no more."""
+    run = foucault_runs["equator"]
+    (o,) = [o for o in run.outcomes if o.check.name == "swing-period"]
+    omega0_dt = 2 * math.pi / 200
+    assert abs(o.measured / o.expected - 1) <= 1.5 * omega0_dt**4 / 120
