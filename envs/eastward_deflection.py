@@ -88,7 +88,7 @@ CHECKS = (
     Check(
         "pole-deflection",
         "m",
-        3e-10,
+        5.6e-10,
         "abs",
         _POLE,
         "N3 at lambda = +-90 deg: cos(lambda) = 0, no deflection",
