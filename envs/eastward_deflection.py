@@ -144,7 +144,12 @@ class EastwardDeflection(Scenario):
             "the platform's rate Omega (the Earth's, scaled up so that the deflection is large)",
             Range(1e-8, 10.0),
             Numeric("rate"),
-            within=Bound("[1e-4, 0.3] / t0, t0 = sqrt(2 height / g)", _rate_range, needs=("height", "g")),
+            within=Bound(
+                "[1e-4, 0.3] / t0, t0 = sqrt(2 height / g) (N3's domain here: its neglected terms' bound (3/8) "
+                "(Omega t0)^2 + (Omega t0)^4 is tested up to Omega t0 = 0.5)",
+                _rate_range,
+                needs=("height", "g"),
+            ),
         ),
     )
     cases = (

@@ -145,7 +145,12 @@ class Foucault(Scenario):
             "the platform's rate Omega (the Earth's, scaled up so that the plane turns within a short run)",
             Range(1e-4, 10.0),
             Numeric("rate"),
-            within=Bound("[0.01, 0.05] sqrt(g/length)", _rate_range, needs=("length", "g")),
+            within=Bound(
+                "[0.01, 0.05] sqrt(g/length) (N2's domain here: its neglected terms are sized up to Omega/omega0 = "
+                "0.05; below 0.01 half a turn takes over 100 periods)",
+                _rate_range,
+                needs=("length", "g"),
+            ),
         ),
         Param(
             "amplitude",
