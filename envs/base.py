@@ -16,7 +16,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-from rigidbench import engines
+from rigidbench import engines, forces
 from rigidbench.scenario import Scenario
 from rigidbench.settings import Settings, profile, read_settings
 
@@ -368,6 +368,8 @@ class ScenarioEnv(gym.Env):
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
+        if "model" in state:
+            forces.attach(self.model)  # a copied model is a new one: its declared forces (rigidbench.forces) follow it
         if self._views_ready:
             self._bind_views()  # the copied views are arrays of their own: point them into the copied MjData
 
@@ -391,6 +393,7 @@ class ScenarioEnv(gym.Env):
             self._models[key] = engines.stored_model(self.scenario.build(resolved, self._settings), self._precision)
         self._views_ready = False  # the views of the last episode may not fit this model: `_start_views` rebinds
         self.model = self._models[key]
+        forces.attach(self.model)  # cheap and idempotent; a copied env's models are new objects (`__setstate__`)
         self._actual = self.scenario.read_params(self.model)
         self.data = self.scenario.start(self.model, self._actual)
         if self._precision != "float64":

@@ -30,6 +30,10 @@ A model declares its forces in MJCF custom elements, so the model file carries i
 
 The batched engines (MuJoCo Warp, MJX) have no passive-force callback and refuse such a model before simulating
 (`refuse_on`).
+
+The second law, ``rigidbench:frame-field`` (`FrameField`), is a uniform field fixed in a body's axes: gravity
+that turns with a rotating platform (the Foucault pendulum, the eastward deflection), where MuJoCo's gravity is
+fixed in the world.
 """
 
 from __future__ import annotations
@@ -142,8 +146,83 @@ def _free_dofs(model: mujoco.MjModel, first: np.ndarray, second: np.ndarray) -> 
     return tuple((np.array(ds)[:, None] + np.arange(3)).ravel() for ds in dofs)
 
 
+FRAME_FIELD = "rigidbench:frame-field"
+
+
+@dataclass(frozen=True)
+class FrameField:
+    """A uniform field of acceleration fixed in the frame of one body (gravity fixed in a turning platform's axes):
+    body ``frame``'s axes carry the field ``field_frame`` (m/s^2), and each body of ``bodies`` feels ``m R g`` at
+    its centre of mass, R its orientation now (``xmat``), m its mass. No reaction is applied to ``frame``.
+
+    MuJoCo's own gravity is fixed in the world: a model whose "down" turns with a body declares this instead (and
+    sets ``gravity="0 0 0"``). Evaluated at every RK4 stage from the stage's orientation, like the other laws.
+    """
+
+    frame: int
+    bodies: np.ndarray
+    mass: np.ndarray
+    field_frame: np.ndarray
+
+    def field_world(self, xmat: np.ndarray) -> np.ndarray:
+        """The field in world axes (m/s^2), shape (3,), from ``data.xmat``."""
+        return xmat[self.frame].reshape(3, 3) @ self.field_frame
+
+    def apply(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Add ``m R g`` at each body's centre of mass to ``data.qfrc_passive``."""
+        a = self.field_world(data.xmat)
+        zero = np.zeros(3)
+        for b, m in zip(self.bodies, self.mass, strict=True):
+            mujoco.mj_applyFT(model, data, m * a, zero, data.xipos[b], int(b), data.qfrc_passive)
+
+
+def frame_field(model: mujoco.MjModel) -> FrameField | None:
+    """The model's field fixed in a body's frame, or None if it declares none.
+
+    Declared as ``<text name="rigidbench:frame-field" data="frame body [body ...]"/>`` (the first name is the body
+    whose axes carry the field, possibly ``world``; the others feel it) and ``<numeric
+    name="rigidbench:frame-field" data="gx gy gz"/>`` (m/s^2, in the frame body's axes).
+
+    Raises
+    ------
+    ValueError
+        If the declaration is malformed: fewer than two names, an unknown body, the world or the frame among the
+        bodies feeling it, a body named twice, a field that is not three finite numbers, or a missing numeric.
+    """
+    it = _custom(model, mujoco.mjtObj.mjOBJ_TEXT, FRAME_FIELD)
+    inum = _custom(model, mujoco.mjtObj.mjOBJ_NUMERIC, FRAME_FIELD)
+    if it < 0 and inum < 0:
+        return None
+    if it < 0:
+        raise ValueError(f"custom text {FRAME_FIELD!r} (the frame body, then the bodies feeling the field) is missing")
+    adr, size = model.text_adr[it], model.text_size[it]
+    names = bytes(model.text_data[adr : adr + size - 1]).decode().split()
+    if len(names) < 2:
+        raise ValueError(f"custom text {FRAME_FIELD!r} must name the frame body and at least one body, got {names}")
+    ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names])
+    for n, i in zip(names, ids, strict=True):
+        if i < 0:
+            raise ValueError(f"custom text {FRAME_FIELD!r}: {n!r} is not a body of the model")
+    frame, bodies = int(ids[0]), ids[1:]
+    if np.any(bodies <= 0) or np.any(bodies == frame) or len(set(bodies)) != len(bodies):
+        raise ValueError(
+            f"custom text {FRAME_FIELD!r}: the bodies feeling the field must be distinct moving bodies other than the "
+            f"frame, got {names[1:]}"
+        )
+    if inum < 0:
+        raise ValueError(f"custom numeric {FRAME_FIELD!r} (the field, m/s^2, in the frame body's axes) is missing")
+    adr, size = model.numeric_adr[inum], model.numeric_size[inum]
+    field_frame = np.array(model.numeric_data[adr : adr + size], dtype=float)
+    if field_frame.shape != (3,) or not np.all(np.isfinite(field_frame)):
+        raise ValueError(f"custom numeric {FRAME_FIELD!r} must be three finite numbers (m/s^2), got {field_frame}")
+    return FrameField(frame, bodies, np.array(model.body_mass[bodies], dtype=float), field_frame)
+
+
 # The force laws: each parses a model (None: the model declares none) into something with `apply(model, data)`.
-LAWS: dict[str, Callable[[mujoco.MjModel], object | None]] = {INVERSE_SQUARE: inverse_square}
+LAWS: dict[str, Callable[[mujoco.MjModel], object | None]] = {
+    INVERSE_SQUARE: inverse_square,
+    FRAME_FIELD: frame_field,
+}
 
 
 def declared(model: mujoco.MjModel) -> list[str]:
@@ -230,7 +309,7 @@ def attach(model: mujoco.MjModel) -> bool:
     Raises
     ------
     ValueError
-        A malformed declaration (see `inverse_square`).
+        A malformed declaration (see `inverse_square`, `frame_field`).
     RuntimeError
         If another passive-force callback is installed in this process (it is never overwritten).
     """

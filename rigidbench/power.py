@@ -12,7 +12,8 @@ power):
 
 - ``mass:<body>``, ``inertia:<body>``: every body with degrees of freedom (the first `MAX_BODIES` of them);
   inertia is skipped where it is below 1e-6 of the body's joint-space inertia (a point bob's 1e-9 kg m^2);
-- ``g``: gravity, where it is not zero;
+- ``g``: gravity, where it is not zero, or the field a model declares fixed in a body's axes
+  (`rigidbench.forces.FrameField`, gravity on a turning platform);
 - ``spring-k``: every joint and tendon stiffness, where there is one;
 - ``friction``: sliding friction of every geom and pair, where contacts are enabled;
 - ``contact-stiffness``: every contact's stiffness (direct solref: k; standard solref: the time constant over
@@ -37,7 +38,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from rigidbench import registry
+from rigidbench import forces, registry
 from rigidbench.results import PASS
 from rigidbench.runner import Job
 from rigidbench.scenario import Scenario
@@ -104,6 +105,14 @@ def quantities(model: mujoco.MjModel) -> list[Quantity]:
             m.opt.gravity[:] = m.opt.gravity * (1 + delta)
 
         out.append(Quantity("g", gravity))
+    field = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, forces.FRAME_FIELD)
+    if field >= 0:  # gravity declared as a field fixed in a body's axes (`rigidbench.forces.FrameField`)
+
+        def frame_field(m: mujoco.MjModel, delta: float, i: int = field) -> None:
+            adr, size = m.numeric_adr[i], m.numeric_size[i]
+            m.numeric_data[adr : adr + size] *= 1 + delta
+
+        out.append(Quantity("g" if not np.any(model.opt.gravity != 0) else "frame-field", frame_field))
     if np.any(model.jnt_stiffness > 0) or np.any(model.tendon_stiffness > 0):
 
         def spring(m: mujoco.MjModel, delta: float) -> None:
