@@ -295,9 +295,10 @@ DOMAINS = (
     ),
 )
 
-# The regimes of the cases: the Kepler cases leave the spring out and the Hooke cases the attraction.
-_KEPLER_ONLY = {"stiffness": Range(0.0, 0.0)}
-_HOOKE_ONLY = {"strength": Range(0.0, 0.0)}
+# The regimes of the cases: the Kepler cases leave the spring out and the Hooke cases the attraction; the law they keep
+# has a strength of at least 1e-2 (a census draws it over five decades, log-uniformly).
+_KEPLER_ONLY = {"stiffness": Range(0.0, 0.0), "strength": Range(1e-2, 1e3)}
+_HOOKE_ONLY = {"strength": Range(0.0, 0.0), "stiffness": Range(1e-2, 1e3)}
 _KEPLER_REGIME = (
     f"the attraction alone (stiffness 0); a bound ellipse with e = |s^2 - 1| <= {MAX_KEPLER_ECCENTRICITY:g} "
     "(domain 'bound-ellipse': s < sqrt(2) is E < 0)"
