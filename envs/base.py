@@ -16,7 +16,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-from rigidbench import engines
+from rigidbench import engines, forces
 from rigidbench.scenario import Scenario
 from rigidbench.settings import Settings, profile, read_settings
 
@@ -368,6 +368,10 @@ class ScenarioEnv(gym.Env):
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
+        # A copied model is a new MjModel: the forces MuJoCo has no element for (`rigidbench.forces`) must be attached
+        # to it as to the original, or the copy steps without them.
+        for model in (self.model, *self._models.values()):
+            forces.attach(model)
         if self._views_ready:
             self._bind_views()  # the copied views are arrays of their own: point them into the copied MjData
 

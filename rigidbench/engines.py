@@ -576,6 +576,40 @@ class CWorlds(Worlds):
         self._batch.step(nstep=nstep)
 
 
+class LoopWorlds(Worlds):
+    """C MuJoCo while a Python passive-force callback is installed (`rigidbench.forces`, while a model declaring a
+    force is alive), which `mujoco.batch` refuses: one MjData per world, stepped by `mj_step` in a loop on this
+    thread (the callback holds the GIL, so threads would gain nothing), bit for bit as the single envs. The host
+    arrays are written into each world before its step and read back after it; the rest of its state (warm start)
+    stays in its MjData."""
+
+    def __init__(self, model: mujoco.MjModel, nworld: int) -> None:
+        from rigidbench import forces
+
+        self.model, self.nworld = model, int(nworld)
+        forces.attach(model)
+        self._data = [mujoco.MjData(model) for _ in range(self.nworld)]
+        n = self.nworld
+        self.qpos, self.qvel, self.time = np.zeros((n, model.nq)), np.zeros((n, model.nv)), np.zeros(n)
+        self.ctrl, self.qfrc_applied = np.zeros((n, model.nu)), np.zeros((n, model.nv))
+        self.xfrc_applied = np.zeros((n, model.nbody, 6))
+        self._row = np.empty(mujoco.mj_stateSize(model, _INTEGRATION))
+
+    def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
+        mujoco.mj_getState(self.model, data, self._row, _INTEGRATION)
+        for i in ids:
+            mujoco.mj_setState(self.model, self._data[i], self._row, _INTEGRATION)
+            self.qpos[i], self.qvel[i], self.time[i] = data.qpos, data.qvel, data.time
+            self.ctrl[i], self.qfrc_applied[i], self.xfrc_applied[i] = data.ctrl, data.qfrc_applied, data.xfrc_applied
+
+    def step(self, nstep: int) -> None:
+        for i, d in enumerate(self._data):
+            d.qpos[:], d.qvel[:], d.time = self.qpos[i], self.qvel[i], self.time[i]
+            d.ctrl[:], d.qfrc_applied[:], d.xfrc_applied[:] = self.ctrl[i], self.qfrc_applied[i], self.xfrc_applied[i]
+            mujoco.mj_step(self.model, d, nstep)
+            self.qpos[i], self.qvel[i], self.time[i] = d.qpos, d.qvel, d.time
+
+
 class HostWorlds(Worlds):
     """Worlds an engine keeps on its device (MJX, Warp): float64 host copies of what the envs read and write, the
     state of the loaded worlds written into them by `_load_host`, and the step count as the clock (`clock`)."""
@@ -740,6 +774,13 @@ def worlds(engine: Engine | None, model: mujoco.MjModel, nworld: int, *, nthread
     if int(nworld) < 1:
         raise ValueError(f"num_envs = {nworld!r} must be an integer >= 1")
     if engine is None:
+        from rigidbench import forces
+
+        forces.attach(model)
+        # mujoco.batch refuses a Python passive-force callback, which `rigidbench.forces` keeps installed while any
+        # model declaring a force is alive (this one or another): then every model is stepped by the loop.
+        if mujoco.get_mjcb_passive() is not None:
+            return LoopWorlds(model, nworld)
         return CWorlds(model, nworld, nthread=nthread)
     engine.check(model)
     if isinstance(engine, MjxEngine):

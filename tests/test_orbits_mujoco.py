@@ -3,6 +3,7 @@ force through rigidbench.forces, under the reference profile and MuJoCo's defaul
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -122,3 +123,30 @@ def test_mujoco_default_euler_velocity_lags_the_position_so_apsides_from_qvel_mo
     plane = orbit.momentum / np.linalg.norm(orbit.momentum)
     angle = tbo._apsidal(traj.time[1:-1], r[1:-1], v[1:-1], plane, orbit)
     assert abs(angle - orbit.apsidal_angle) < 1e-3
+
+
+def test_batched_worlds_step_bit_for_bit_while_a_declared_force_is_alive():
+    """mujoco.batch refuses the Python passive callback `rigidbench.forces` installs while a declared model lives,
+    for every model; the worlds then step by the loop (`LoopWorlds`), bit for bit as mj_step on one MjData."""
+    from rigidbench.engines import LoopWorlds, worlds
+
+    kepler = SCENARIO.prepare("kepler")  # keeps the declared model, and so the callback, alive
+    for model, data in ((kepler.model, kepler.data), (registry.get("pendulum").prepare().model, None)):
+        data = data if data is not None else registry.get("pendulum").start(model)
+        batch = worlds(None, model, 2)
+        assert isinstance(batch, LoopWorlds)
+        batch.load(np.array([0, 1]), data)
+        batch.xfrc_applied[1, -1, 0] = 0.01  # world 1 pushed: the worlds are independent
+        single = mujoco.MjData(model)
+        mujoco.mj_setState(model, single, _state(model, data), mujoco.mjtState.mjSTATE_INTEGRATION)
+        batch.step(7)
+        mujoco.mj_step(model, single, 7)
+        assert np.array_equal(batch.qpos[0], single.qpos) and np.array_equal(batch.qvel[0], single.qvel)
+        assert not np.array_equal(batch.qvel[1], single.qvel)
+    del kepler
+
+
+def _state(model, data):
+    state = np.empty(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_INTEGRATION))
+    mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_INTEGRATION)
+    return state
