@@ -150,3 +150,19 @@ def _state(model, data):
     state = np.empty(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_INTEGRATION))
     mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_INTEGRATION)
     return state
+
+
+def test_power_perturbs_each_force_law_in_the_cases_that_have_it():
+    """`rigidbench power` lists the quantities of every case (the spring of the Hooke cases, the declared strength of
+    the Kepler cases); a case whose model lacks one runs unperturbed."""
+    from rigidbench import power
+
+    names = [q.name for _, q in power.plan(["two-body-orbit"], None)]
+    assert {"spring-k", "inverse-square-k", "mass:body1", "mass:body2"} <= set(names)
+    kepler = SCENARIO.prepare("kepler").model
+    power.Perturbation("inverse-square-k", 1e-3)(kepler)
+    assert forces.inverse_square(kepler).k[0] == pytest.approx(-100.0 * (1 + 1e-3), rel=1e-15)
+    hooke = SCENARIO.prepare("hooke").model
+    before = hooke.tendon_stiffness.copy(), hooke.numeric_data.copy()
+    power.Perturbation("inverse-square-k", 1e-3)(hooke)
+    assert np.array_equal(hooke.tendon_stiffness, before[0]) and np.array_equal(hooke.numeric_data, before[1])
