@@ -189,12 +189,16 @@ _ALL = tuple(c.name for c in CHECKS)
 
 @dataclass(frozen=True)
 class TendonStiffness:
-    """The linear stiffness (N/m) of a spatial tendon (its spring's higher-order coefficients stay 0)."""
+    """The linear stiffness (N/m) of a spatial tendon (its spring's higher-order coefficients stay 0); a tendon with
+    none is drawn transparent (it exerts no force)."""
 
     tendon: str
 
     def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
-        spec.tendon(self.tendon).stiffness = [float(value), 0.0, 0.0]
+        tendon = spec.tendon(self.tendon)
+        tendon.stiffness = [float(value), 0.0, 0.0]
+        if float(value) == 0.0:
+            tendon.rgba = [*tendon.rgba[:3], 0.0]
 
     def read(self, model: mujoco.MjModel) -> Value:
         return float(model.tendon_stiffness[model.tendon(self.tendon).id])
