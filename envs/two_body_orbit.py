@@ -379,8 +379,8 @@ class TwoBodyOrbit(Scenario):
             "inverse-square attraction, e = 0.44, CM at rest: both bodies trace ellipses with a focus at the CM",
             {"stiffness": 0.0, "strength": 100.0, "speed_ratio": 1.2, "cm_speed": 0.0},
             _ALL,
-            ranges={**_KEPLER_ONLY, "speed_ratio": Range(0.45, 1.34)},
-            regime=_KEPLER_REGIME,
+            ranges={**_KEPLER_ONLY, "speed_ratio": Range(0.1, 1.41)},
+            regime=_KEPLER_REGIME + "; s <= 1.41 < sqrt(2)",
         ),
         Case(
             "kepler-eccentric",
