@@ -465,22 +465,20 @@ class TwoBodyOrbit(Scenario):
     def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
         m1, m2 = float(model.body("body1").mass[0]), float(model.body("body2").mass[0])
         mu, total = orbits.reduced_mass(m1, m2), m1 + m2
-        law_is = forces.inverse_square(model)
+        attraction = forces.inverse_square(model)
         x1, x2, v1, v2 = (a[0] for a in self._states(model, data.qpos, data.qvel))
-        if law_is is not None:
-            orbit = orbits.kepler_orbit(mu, float(-law_is.k[0]), x1 - x2, v1 - v2)
+        if attraction is not None:
+            orbit = orbits.kepler_orbit(mu, float(-attraction.k[0]), x1 - x2, v1 - v2)
         else:
             orbit = orbits.hooke_orbit(mu, float(model.tendon_stiffness[model.tendon("spring").id]), x1 - x2, v1 - v2)
         bodies = orbits.body_orbits(m1, m2, orbit)
         cm0, cm_velocity = (m1 * x1 + m2 * x2) / total, (m1 * v1 + m2 * v2) / total
-        reference = self.reference_settings(self.read_params(model))["timestep"].value
         out: dict[str, Any] = {
             "_theory": orbit,
             "_bodies": bodies,
             "_masses": (m1, m2),
             "_cm0": cm0,
             "_cm_velocity": cm_velocity,
-            "_reference_step": reference,
             "_tolerance": {
                 "apsidal-angle": ORBIT_ERROR / orbit.eccentricity,
                 **_roundoff_floors(model, orbit, bodies, cm0, cm_velocity),
