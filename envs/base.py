@@ -368,8 +368,10 @@ class ScenarioEnv(gym.Env):
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        if "model" in state:
-            forces.attach(self.model)  # a copied model is a new one: its declared forces (rigidbench.forces) follow it
+        # A copied model is a new MjModel: the forces MuJoCo has no element for (`rigidbench.forces`) must be attached
+        # to it as to the original, or the copy steps without them.
+        for model in (*([self.model] if "model" in state else []), *state.get("_models", {}).values()):
+            forces.attach(model)
         if self._views_ready:
             self._bind_views()  # the copied views are arrays of their own: point them into the copied MjData
 

@@ -545,8 +545,6 @@ class Worlds:
 
 
 _INTEGRATION = mujoco.mjtState.mjSTATE_INTEGRATION
-# The per-world arrays the envs read and write (`Worlds`).
-_LOOPED = ("qpos", "qvel", "time", "ctrl", "qfrc_applied", "xfrc_applied")
 
 
 class CWorlds(Worlds):
@@ -563,41 +561,33 @@ class CWorlds(Worlds):
         from rigidbench import forces
 
         self.model, self.nworld = model, int(nworld)
-        self._row = np.empty(mujoco.mj_stateSize(model, _INTEGRATION))
-        if forces.attach(model):
-            # `mujoco.batch` accepts only C physics callbacks, and a declared force (`rigidbench.forces`) is added by
-            # a Python one: one MjData per world, stepped in turn (one thread either way: `forces.threads_for`).
-            self._batch = None
-            self._datas = [mujoco.MjData(model) for _ in range(self.nworld)]
-            for name in _LOOPED:
-                setattr(self, name, np.array([getattr(d, name) for d in self._datas]))
-            return
+        forces.attach(model)
         nthread = forces.threads_for(model, min(self.nworld, os.cpu_count() or 1) if nthread is None else int(nthread))
         self._batch = batch.Batch(model, self.nworld, nthread=nthread)
-        for name in _LOOPED:
+        for name in ("qpos", "qvel", "time", "ctrl", "qfrc_applied", "xfrc_applied"):
             setattr(self, name, self._batch.bind(name))
+        self._row = np.empty(mujoco.mj_stateSize(model, _INTEGRATION))
+        self._scratch: mujoco.MjData | None = None
 
     def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
         mujoco.mj_getState(self.model, data, self._row, _INTEGRATION)
-        if self._batch is not None:
-            self._batch.state[ids] = self._row
-            return
-        for i in np.arange(self.nworld)[ids]:
-            mujoco.mj_setState(self.model, self._datas[i], self._row, _INTEGRATION)
-            for name in _LOOPED:
-                getattr(self, name)[i] = getattr(self._datas[i], name)
+        self._batch.state[ids] = self._row
 
     def step(self, nstep: int) -> None:
-        if self._batch is not None:
+        if mujoco.get_mjcb_passive() is None:
             self._batch.step(nstep=nstep)
             return
-        for i, d in enumerate(self._datas):  # the arrays the envs read and write, in and out of each world's MjData
-            d.time = self.time[i]
-            for name in _LOOPED[:2] + _LOOPED[3:]:
-                getattr(d, name)[...] = getattr(self, name)[i]
-            mujoco.mj_step(self.model, d, nstep)
-            for name in _LOOPED:
-                getattr(self, name)[i] = getattr(d, name)
+        # A Python passive-force callback is installed (`rigidbench.forces`, while any model declaring a force is
+        # alive, this one or another), and `mujoco.batch` refuses to step under one. The batch's own steps, one world
+        # at a time: its state row into one MjData, `mj_step`, and back (what a non-persistent batch does on each of
+        # its threads; bit for bit the same, `tests/test_vector.py`).
+        if self._scratch is None:
+            self._scratch = mujoco.MjData(self.model)
+        scratch, state = self._scratch, self._batch.state
+        for i in range(self.nworld):
+            mujoco.mj_setState(self.model, scratch, state[i], _INTEGRATION)
+            mujoco.mj_step(self.model, scratch, nstep)
+            mujoco.mj_getState(self.model, scratch, state[i], _INTEGRATION)
 
 
 class HostWorlds(Worlds):

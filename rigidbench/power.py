@@ -15,9 +15,14 @@ power):
 - ``g``: gravity, where it is not zero, or the field a model declares fixed in a body's axes
   (`rigidbench.forces.FrameField`, gravity on a turning platform);
 - ``spring-k``: every joint and tendon stiffness, where there is one;
+- ``inverse-square-k``: every strength of the model's declared inverse-square pairs (`rigidbench.forces`), where it
+  declares one;
 - ``friction``: sliding friction of every geom and pair, where contacts are enabled;
 - ``contact-stiffness``: every contact's stiffness (direct solref: k; standard solref: the time constant over
   sqrt(1 + delta)), where contacts are enabled.
+
+A scenario's quantities are those of every case's model (cases may differ, e.g. one force law or another); a case
+whose model lacks a quantity runs unperturbed (it cannot see it).
 
 Mass and inertia edits are followed by `mujoco.mj_setConst` (MuJoCo 4 caches the joint-space inertia ``dof_M0``;
 without it the edit does nothing).
@@ -73,7 +78,7 @@ class Perturbation:
             if q.name == self.name:
                 q.scale(model, self.delta)
                 return
-        raise ValueError(f"the model has no quantity {self.name!r} to perturb")
+        # Another case's quantity (module docstring): this case's model lacks it and runs unperturbed.
 
 
 def _moving_bodies(model: mujoco.MjModel) -> list[int]:
@@ -120,6 +125,15 @@ def quantities(model: mujoco.MjModel) -> list[Quantity]:
             m.tendon_stiffness[:] = m.tendon_stiffness * (1 + delta)
 
         out.append(Quantity("spring-k", spring))
+    if forces.inverse_square(model) is not None:
+
+        def inverse_square(m: mujoco.MjModel, delta: float) -> None:
+            i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, forces.INVERSE_SQUARE)
+            if i >= 0:  # the quantity of another case (`plan`): a model without the force is left as it is
+                adr, size = m.numeric_adr[i], m.numeric_size[i]
+                m.numeric_data[adr : adr + size] *= 1 + delta
+
+        out.append(Quantity("inverse-square-k", inverse_square))
     contact = not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
     collidable = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
     if contact and (collidable.any() or model.npair):
@@ -200,7 +214,7 @@ def _copy(model: mujoco.MjModel) -> mujoco.MjModel:
 
 
 def plan(targets: Sequence[str], settings: Settings | None) -> list[tuple[Scenario, Quantity]]:
-    """Every (scenario, quantity) pair of the targets' scenarios (quantities from each scenario's default model).
+    """Every (scenario, quantity) pair of the targets' scenarios: the quantities of every case's model.
 
     Raises
     ------
@@ -210,8 +224,11 @@ def plan(targets: Sequence[str], settings: Settings | None) -> list[tuple[Scenar
     pairs = []
     for target in targets or list(registry.scenarios()):
         scenario, _ = registry.parse_target(target)
-        model = scenario.prepare(scenario.cases[0].name, None, settings).model
-        pairs += [(scenario, q) for q in quantities(model)]
+        found: dict[str, Quantity] = {}
+        for case in scenario.cases:  # every case's quantities, in the order they first appear
+            for q in quantities(scenario.prepare(case.name, None, settings).model):
+                found.setdefault(q.name, q)
+        pairs += [(scenario, q) for q in found.values()]
     return pairs
 
 

@@ -96,6 +96,7 @@ def frame_camera(model: mujoco.MjModel, qpos: np.ndarray, *, margin: float = 1.1
     side = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, "side")
     if side >= 0:  # look along the model's own side camera (its -z axis in the world frame)
         mujoco.mj_kinematics(model, data)
+        mujoco.mj_camlight(model, data)  # camera poses: mj_kinematics leaves cam_xmat at zero
         forward = -data.cam_xmat[side].reshape(3, 3)[:, 2]
         cam.azimuth = math.degrees(math.atan2(forward[1], forward[0]))
         cam.elevation = math.degrees(math.asin(np.clip(forward[2], -1, 1)))
