@@ -15,19 +15,16 @@ along +y; LAB angles are measured from +x.
 from __future__ import annotations
 
 import copy
-import functools
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-import gymnasium as gym
 import mujoco
 import numpy as np
 
 from rigidbench.analytic import scattering
 from rigidbench.contact import MIN_STEPS, ContactSpring, contact_spring, elastic_contact
-from rigidbench.envs.base import ScenarioEnv
+from rigidbench.envs.pair import FreePairEnv
 from rigidbench.params import BodyMass, Bound, ContactStiffness, GeomSize, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.settings import MAX_ACCELERATION, round_step
@@ -88,6 +85,20 @@ def contact_floor(eps: float, a: float, depth: float, steady: tuple[float, float
     return max(ROUNDOFF_FACTOR * eps * a / depth, quantised)
 
 
+@dataclass(frozen=True)
+class _ContactFloor:
+    """A check's contact floor as a function of eps (`contact_floor` times the check's scale); a class, not a
+    closure, so a prediction holding it pickles with its env."""
+
+    a: float
+    depth: float
+    steady: tuple[float, float, float]
+    scale: float
+
+    def __call__(self, eps: float) -> float:
+        return self.scale * contact_floor(eps, self.a, self.depth, self.steady)
+
+
 def _contact_roundoff(
     a: float, depth: float, prediction: Mapping[str, Any], *, steady: tuple[float, float, float]
 ) -> dict[str, Any]:
@@ -108,16 +119,15 @@ def _contact_roundoff(
       1.63e-3 off against this floor's 2.33e-3; m1/m2 = 6.4e11 (the MJX census miss): 5.5e-3 against 8.6e-3.
     """
 
-    def floor(eps: float, scale: float) -> float:
-        return scale * contact_floor(eps, a, depth, steady)
-
     # Every check but the momentum (exact pairwise forces: the random walk's floor) is read from the impulse.
     scales = {c.name: 1.0 for c in CHECKS if c.name not in ("momentum", "opening-angle", "soft-shift-exponent")}
     scales["opening-angle"] = 2.0
     tolerance = prediction["_tolerance"]["soft-shift-exponent"]
     scales["soft-shift-exponent"] = (tolerance - 1e-3) / ANGLE_ERROR if tolerance > 1e-3 else 0.0
     return {
-        "_roundoff_eps": {name: functools.partial(floor, scale=scale) for name, scale in scales.items() if scale > 0},
+        "_roundoff_eps": {
+            name: _ContactFloor(a, depth, tuple(steady), scale) for name, scale in scales.items() if scale > 0
+        },
         "_roundoff_eps_rule": CONTACT_ROUNDOFF_RULE,
     }
 
@@ -619,7 +629,7 @@ def _angle(v: np.ndarray, w: np.ndarray) -> np.ndarray:
     return np.arctan2(cross, np.einsum("...i,...i", v, np.broadcast_to(w, np.shape(v))))
 
 
-class HardSpheresEnv(ScenarioEnv):
+class HardSpheresEnv(FreePairEnv):
     """``rigidbench/HardSpheres-v0``: one collision of two smooth spheres, scored against theory every step.
 
     Description
@@ -675,12 +685,6 @@ class HardSpheresEnv(ScenarioEnv):
     default_frame_skip: ClassVar[int] = 40
     max_force: ClassVar[float] = 1.0
 
-    def _observation_space(self) -> gym.spaces.Box:
-        return gym.spaces.Box(-np.inf, np.inf, shape=(12,), dtype=np.float64)
-
-    def _action_space(self) -> gym.spaces.Box:
-        return gym.spaces.Box(-self.max_force, self.max_force, shape=(3,), dtype=np.float64)
-
     def _load(self, case: str, params) -> None:
         super()._load(case, params)
         # Read or written every step (issue 8): the joints' addresses (`HardSpheres._state` looks four up by name,
@@ -694,39 +698,11 @@ class HardSpheresEnv(ScenarioEnv):
             for name in ("projectile", "target")
         )
         self._body_id = model.body("projectile").id
-        self._a = float(self.prediction["_a"])
+        self._scale = float(self.prediction["_a"])  # the deviation's length: the contact distance a
         self._start_views()
-
-    def _bind_views(self) -> None:
-        """x1, x2, v1, v2 and the projectile's force (`ScenarioEnv._bind_views`)."""
-        data = self.data
-        self._obs_views = tuple(getattr(data, array)[where] for array, where in self._slices)
-        self._force = data.xfrc_applied[self._body_id, :3]
-
-    def _observation(self) -> np.ndarray:
-        return np.concatenate(self._obs_views)  # [x1, x2, v1, v2], as `HardSpheres._state` slices them
-
-    def _apply_action(self, action: np.ndarray) -> None:
-        self._force[:] = action
-
-    def _observations(self, worlds) -> np.ndarray:
-        return np.concatenate([getattr(worlds, array)[:, where] for array, where in self._slices], axis=1)
-
-    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
-        worlds.xfrc_applied[:, self._body_id, :3] = actions
-
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
-        return obs[:, 0:3] - obs[:, 3:6]
-
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        d1, d2, d3 = (measured - predicted).T
-        return np.sqrt(d1 * d1 + d2 * d2 + d3 * d3) / self._a
 
     # The soft-contact solution (a closure over scipy's dense output): solved again by a copy that needs it.
     _recomputed: ClassVar[tuple[str, ...]] = ("_motion", "_motion_for")
-
-    # Observables compared with theory: the relative position r = x1 - x2 (m), world frame.
-    observables: ClassVar[tuple[str, ...]] = ("r_x", "r_y", "r_z")
 
     def _theory(self, t: np.ndarray) -> np.ndarray:
         """r(t) of the soft-contact ODE (zero action), shape (len(t), 3); solved once per episode."""
@@ -738,15 +714,3 @@ class HardSpheresEnv(ScenarioEnv):
             self._motion_for = p
         r, _ = self._motion(np.atleast_1d(np.asarray(t, dtype=float)) - p["_t0"])
         return r.T
-
-    def _measure(self, obs: np.ndarray) -> list[float]:
-        # r = x1 - x2 in Python floats: the same subtractions as obs[0:3] - obs[3:6], without an array per step.
-        o = obs.tolist()
-        return [o[0] - o[3], o[1] - o[4], o[2] - o[5]]
-
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
-        # |m - p| / a over three Python floats: np.linalg.norm's sqrt(dot) for three components, without its
-        # temporaries (equal to it, or an ulp apart where BLAS's dot rounds otherwise; tests/test_performance.py).
-        (m1, m2, m3), (p1, p2, p3) = measured, predicted
-        d1, d2, d3 = m1 - p1, m2 - p2, m3 - p3
-        return math.sqrt(d1 * d1 + d2 * d2 + d3 * d3) / self._a

@@ -17,15 +17,14 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
 
-import gymnasium as gym
 import mujoco
 import numpy as np
 
 from rigidbench import forces, signals
 from rigidbench.analytic import orbits
-from rigidbench.envs.base import ScenarioEnv
+from rigidbench.envs.pair import FreePairEnv
 from rigidbench.params import Numeric, Param, Range, ScaledBodyMass, Value
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.settings import round_step
@@ -672,7 +671,7 @@ def _apsidal(t: np.ndarray, r: np.ndarray, v: np.ndarray, plane_z: np.ndarray, o
     return _farthest(np.diff(phase), orbit.apsidal_angle)
 
 
-class TwoBodyOrbitEnv(ScenarioEnv):
+class TwoBodyOrbitEnv(FreePairEnv):
     """``rigidbench/TwoBodyOrbit-v0``: two bodies on a Kepler or Hooke orbit, scored against theory every step.
 
     Description
@@ -722,15 +721,6 @@ class TwoBodyOrbitEnv(ScenarioEnv):
     """
 
     scenario_cls = TwoBodyOrbit
-    max_force: ClassVar[float] = 1.0
-    # Observables compared with theory: the relative position r = x1 - x2 (m), world frame.
-    observables: ClassVar[tuple[str, ...]] = ("r_x", "r_y", "r_z")
-
-    def _observation_space(self) -> gym.spaces.Box:
-        return gym.spaces.Box(-np.inf, np.inf, shape=(12,), dtype=np.float64)
-
-    def _action_space(self) -> gym.spaces.Box:
-        return gym.spaces.Box(-self.max_force, self.max_force, shape=(3,), dtype=np.float64)
 
     def _load(self, case: str, params) -> None:
         super()._load(case, params)
@@ -744,44 +734,10 @@ class TwoBodyOrbitEnv(ScenarioEnv):
             ("qvel", slice(d2, d2 + 3)),
         )
         self._body_id = self.model.body("body1").id
-        self._a = float(self.prediction["_theory"].semi_major)
+        self._scale = float(self.prediction["_theory"].semi_major)
         self._start_views()
-
-    def _bind_views(self) -> None:
-        """x1, x2, v1, v2 and body 1's force (`ScenarioEnv._bind_views`)."""
-        data = self.data
-        self._obs_views = tuple(getattr(data, array)[where] for array, where in self._slices)
-        self._force = data.xfrc_applied[self._body_id, :3]
-
-    def _observation(self) -> np.ndarray:
-        return np.concatenate(self._obs_views)
-
-    def _apply_action(self, action: np.ndarray) -> None:
-        self._force[:] = action
-
-    def _observations(self, worlds) -> np.ndarray:
-        return np.concatenate([getattr(worlds, array)[:, where] for array, where in self._slices], axis=1)
-
-    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
-        worlds.xfrc_applied[:, self._body_id, :3] = actions
-
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
-        return obs[:, 0:3] - obs[:, 3:6]
-
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        d1, d2, d3 = (measured - predicted).T
-        return np.sqrt(d1 * d1 + d2 * d2 + d3 * d3) / self._a
 
     def _theory(self, t: np.ndarray) -> np.ndarray:
         """r(t) of the closed form (zero action), shape (len(t), 3)."""
         r, _ = self.prediction["_theory"].position(np.asarray(t, dtype=float) - self._time0)
         return r
-
-    def _measure(self, obs: np.ndarray) -> list[float]:
-        o = obs.tolist()
-        return [o[0] - o[3], o[1] - o[4], o[2] - o[5]]
-
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
-        (m1, m2, m3), (p1, p2, p3) = measured, predicted
-        d1, d2, d3 = m1 - p1, m2 - p2, m3 - p3
-        return math.sqrt(d1 * d1 + d2 * d2 + d3 * d3) / self._a
