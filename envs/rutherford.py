@@ -620,25 +620,41 @@ class Rutherford(Scenario):
             return simulate(model, data, duration, control=control)
         return _march(model, data, round(duration / model.opt.timestep))
 
-    def measure(self, model: mujoco.MjModel, traj, prediction: Mapping[str, Any]) -> dict[str, float]:
+    def outgoing(self, prediction: Mapping[str, Any], qpos: np.ndarray, qvel: np.ndarray) -> dict[str, np.ndarray]:
+        """Per pair, from a state row (any time after the start): the CM angle theta between the asymptotes (the
+        outgoing one read from the state's Runge-Lenz vector), the LAB asymptotic velocities v1, v2 and their angles
+        psi, zeta from the beam (+x), the outgoing direction, and the invariants (`_invariants`)."""
         pr = prediction["_pairs"]
         kappa = prediction["_kappa"]
         m1, m2 = pr["m1"], pr["m2"]
-        s0 = self.split(pr, traj.qpos[0], traj.qvel[0])
-        s1 = self.split(pr, traj.qpos[-1], traj.qvel[-1])
-        inv = _invariants(s1, m1, m2, kappa)
+        inv = _invariants(self.split(pr, qpos, qvel), m1, m2, kappa)
         out_dir = coulomb.outgoing_direction(inv["r"], inv["rdot"], kappa)
-        theta = _angle(out_dir, prediction["_incoming"])
-        beam_axis = np.array([1.0, 0.0, 0.0])
         # LAB asymptotic velocities: the CM velocity and the asymptotic relative velocity (speed from the energy).
         cm_velocity = inv["momentum"] / (m1 + m2)
         rel = inv["speed"][:, None] * out_dir
         v1 = cm_velocity + (m2 / (m1 + m2)) * rel
         v2 = cm_velocity - (m1 / (m1 + m2)) * rel
+        beam_axis = np.array([1.0, 0.0, 0.0])
+        return {
+            "theta": _angle(out_dir, prediction["_incoming"]),
+            "psi": _angle(v1, beam_axis),
+            "zeta": _angle(v2, beam_axis),
+            "v1": v1,
+            "v2": v2,
+            "out": out_dir,
+            "invariants": inv,
+        }
+
+    def measure(self, model: mujoco.MjModel, traj, prediction: Mapping[str, Any]) -> dict[str, float]:
+        pr = prediction["_pairs"]
+        m1, m2 = pr["m1"], pr["m2"]
+        s0 = self.split(pr, traj.qpos[0], traj.qvel[0])
+        s1 = self.split(pr, traj.qpos[-1], traj.qvel[-1])
+        out = self.outgoing(prediction, traj.qpos[-1], traj.qvel[-1])
+        inv, out_dir, theta, psi, zeta = out["invariants"], out["out"], out["theta"], out["psi"], out["zeta"]
+        v1, v2 = out["v1"], out["v2"]
         u = prediction["_speed"]
         t0 = 0.5 * m1 * u * u
-        psi = _angle(v1, beam_axis)
-        zeta = _angle(v2, beam_axis)
         energy = np.max(np.abs(inv["energy"] - prediction["_energy0"]) / prediction["_energy0"])
         p0 = prediction["_momentum0"]
         momentum = np.max(np.linalg.norm(inv["momentum"] - p0, axis=-1) / np.linalg.norm(p0, axis=-1))
