@@ -898,6 +898,13 @@ class RutherfordEnv(ScenarioEnv):
         self._scale = float(coulomb.closest_approach(float(self.prediction["_b"][0]), self.prediction["_distance"]))
         self._start_views()
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """A copy or an unpickled env holds new MjModel objects, which MuJoCo's passive callback does not know yet:
+        attach them (`rigidbench.forces.attach`), or the copy would step without the Coulomb force."""
+        super().__setstate__(state)
+        for model in (self.model, *self._models.values()):
+            forces.attach(model)
+
     def _action_space(self) -> gym.spaces.Box:
         p = self.params
         force = p["m1"] * p["speed"] ** 2 / (4 * _distance(p))
