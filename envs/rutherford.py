@@ -8,11 +8,12 @@ model (`apply_derived`), so a Monte Carlo batch is one simulation, the force one
 
 Finite distance. A run starts and ends at a separation R = ``separation`` r_min, where a Coulomb orbit is still
 bending (the tail of k / r): there the speed is short of its asymptote by D / R relatively and the velocity's
-direction by ``delta(R) ~ b D / (2 R^2)`` (`coulomb.asymptote_lag`; 2.4e-4 rad at the defaults, 2000 times the
-angle tolerance). The scenario corrects for both exactly: each pair starts on the exact hyperbola whose asymptotes
-are the textbook problem (target at rest at t = -inf, `coulomb.relative_orbit`), and the outgoing asymptote is read
-from the final state's invariants (`coulomb.outgoing_direction`, Runge-Lenz), which the rest of an exact Coulomb
-orbit keeps. The `finite-distance-deflection` check measures the uncorrected angle against the exact orbit at R.
+direction by ``delta(R) ~ b D / (2 R^2)`` (`coulomb.asymptote_lag`; at the defaults, R = 40 r_min = 97 D: the
+speed 1.0 % short, the direction 5.4e-5 rad at each end, 1.1e-4 rad in all, 1100 times the angle tolerance). The
+scenario corrects for both exactly: each pair starts on the exact hyperbola whose asymptotes are the textbook
+problem (target at rest at t = -inf, `coulomb.relative_orbit`), and the outgoing asymptote is read from the final
+state's invariants (`coulomb.outgoing_direction`, Runge-Lenz), which the rest of an exact Coulomb orbit keeps. The
+`finite-distance-deflection` check measures the uncorrected angle against the exact orbit at R.
 
 Conventions: the target is the pair's first body, r = r_projectile - r_target (k > 0 repels); the beam is along
 +x, a single collision's impact offset along +y (a beam's at a random azimuth about x); D = k / (mu v^2).
@@ -63,14 +64,15 @@ _LAB = (
 _GOF = (
     f"Pearson chi-square over {NBINS} bins (merged to >= {MIN_EXPECTED:g} expected), pass if p >= {ALPHA:g}: a "
     f"correct simulation fails with probability {ALPHA:g} over seeds. Systematic shifts: RK4's angle error <= 1e-7 "
-    "rad moves a fraction ~1e-7 / bin width (< 1e-5) of the collisions across a bin edge, far below the statistical "
-    "resolution 1/sqrt(n) of any beam up to n = 1e5"
+    "rad moves a fraction ~1e-7 / bin width (< 1e-4) of the collisions across a bin edge, far below the statistical "
+    "resolution 1/sqrt(n) of any beam up to n = 1e5. What n = 500 resolves (half the seeds fail at p < 1e-3): the "
+    "law's exponent 4 +- 0.75, its scale D + 2.6 % (D - 0.1 %: collisions fall below theta_min, where none may be)"
 )
 _DRIFT = (
     "the theory's neglected terms: C9 is asymptotic in t; the same fit (A + C ln t + B / t over the last 95 % of the "
     "run's time after the closest approach) applied to the exact orbit (coulomb.relative_orbit) at the same times "
     "misses the asymptotic C by beta (0.4 % of C at the defaults); tolerance 2 |beta| + RK4's position error "
-    "(1e-7 of the distance travelled), set per run"
+    "(1e-7 of the distance travelled), set per run, listed at the defaults"
 )
 CHECKS = (
     Check(
@@ -102,8 +104,9 @@ CHECKS = (
         "1",
         1e-6,
         "rel",
-        "the minimum of |r| between samples, cubic-interpolated at the zero of d|r|/dt = r.v/|r| (signals.extrema): "
-        "error ~ (dt v / r_min)^4 = 6e-6 of ... measured <= 5e-8; RK4's position error <= 1e-8 r_min",
+        "the minimum of |r| between samples, interpolated at the zero of d|r|/dt = r.v/|r| (signals.extrema), "
+        "an error of order (dt v / r_min)^4 = 6e-6 times a small constant: measured <= 1e-7 relative (cases and "
+        "census), RK4's own position error <= 1e-8 r_min",
         "C7: r_min = D + sqrt(D^2 + b^2), D = k / (mu v^2); 2 D = k / E head-on",
     ),
     Check(
@@ -174,7 +177,7 @@ CHECKS = (
     Check(
         "lab-log-drift",
         "m",
-        1e-5,
+        3.1e-5,
         "abs",
         _DRIFT,
         "C9: the projectile's LAB lateral offset ~ const + C ln t, C = -(m2/M) D sin(theta - psi) (no asymptote)",
@@ -182,7 +185,7 @@ CHECKS = (
     Check(
         "cm-log-drift",
         "m",
-        1e-5,
+        4.2e-6,
         "abs",
         _DRIFT,
         "C9: the CM-frame relative orbit has a true asymptote: C = 0",
@@ -365,7 +368,9 @@ class Rutherford(Scenario):
             "head-on",
             "b = 0, m2 = 3 m1: closest approach 2 D = k / E, the projectile bounces back (psi = pi), T1/T0 = 1/4",
             {"m2": lambda p: 3 * p["m1"], "b": lambda p: 0.0, "n": lambda p: 1},
-            _ONE,
+            # The motion stays on the beam's axis (no force across it), so the CM angle pi and the target's zeta = 0
+            # hold by symmetry whatever the integration does: not checked. psi = pi checks the LAB reversal (m1 < m2).
+            ("projectile-lab-angle", "projectile-energy", "target-energy", "closest-approach", "energy", "momentum"),
             ranges={"n": Range(1, 1), "m1": Range(1e-3, 1e3 / 3)},
             regime="one collision; m1 <= 333 kg, so that m2 = 3 m1 is within its range",
         ),
