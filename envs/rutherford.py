@@ -50,6 +50,10 @@ NBINS = 20
 ALPHA = 1e-3
 # A beam's start and end: the head-on pair (closest of all, r_min = 2 D) at `separation` r_min.
 BEAM_SINGLE = 1  # n = 1: one collision (plus a probe pair at b0 when m1 > m2)
+# Pairs in a beam's model: a beam of n > BLOCK collisions runs in blocks of BLOCK pairs, each drawn from its own
+# Generator (seed, block) and stepped on the same compiled model. MuJoCo 4.0 compiles a model of N free bodies in a
+# time that grows as N^2 (0.23 s at 500 pairs, 1.1 s at 1000, measured), so one model of 1e5 pairs is out of reach.
+BLOCK = 500
 MIN_SPEED_FRACTION = 1e-3  # the projectile's LAB speed / u below which its LAB angle is set by the integration error
 
 _RK4 = (
@@ -412,7 +416,7 @@ class Rutherford(Scenario):
             ),
             "pairs": Derived(
                 float(pairs),
-                "pairs in the model: the beam's n"
+                f"pairs in the model: the beam's n, in blocks of at most {BLOCK}"
                 if self._beam(params)
                 else "one collision" + (", and a probe at b0 (m1 > m2)" if pairs == 2 else ""),
             ),
@@ -420,7 +424,7 @@ class Rutherford(Scenario):
 
     def _pairs(self, params: Mapping[str, Any]) -> int:
         if self._beam(params):
-            return int(params["n"])
+            return min(int(params["n"]), BLOCK)
         return 2 if params["m1"] > params["m2"] else 1
 
     def apply_derived(self, spec: mujoco.MjSpec, name: str, value: float) -> None:
@@ -486,51 +490,59 @@ class Rutherford(Scenario):
 
     # ---- initial state ----------------------------------------------------------------------------------------
 
-    def _impacts(self, model: mujoco.MjModel, distance: float) -> tuple[np.ndarray, np.ndarray]:
-        """Impact parameters (m) and azimuths (rad) of the model's pairs: the beam's, drawn from its seed, or the
-        single collision's b (and the probe's b0)."""
-        n = int(model.numeric("samples").data[0])
-        count = self.pairs(model)["count"]
-        if n > BEAM_SINGLE:
-            rng = np.random.default_rng(int(model.numeric("seed").data[0]))
+    @staticmethod
+    def is_beam(model: mujoco.MjModel) -> bool:
+        """Whether the model is a beam's (more pairs than a collision and its probe). Not read from the ``samples``
+        numeric, which the ``thorough`` profile raises in every case."""
+        return Rutherford.pairs(model)["count"] > 2
+
+    def _impacts(self, model: mujoco.MjModel, distance: float, block: int) -> tuple[np.ndarray, np.ndarray]:
+        """Impact parameters (m) and azimuths (rad) of the model's pairs: block `block` of the beam, drawn from
+        default_rng(seed) for block 0 and default_rng([seed, block]) after it; or the single collision's b (and the
+        probe's b0)."""
+        pr = self.pairs(model)
+        count = pr["count"]
+        if self.is_beam(model):
+            seed = int(model.numeric("seed").data[0])
+            rng = np.random.default_rng(seed if block == 0 else [seed, block])
             radius = coulomb.beam_radius(float(model.numeric("min_angle").data[0]), distance)
             b = radius * np.sqrt(rng.random(count))  # uniform over the disc
             return b, 2 * np.pi * rng.random(count)
         b = [float(model.numeric("b").data[0])]
         if count == 2:
-            x = float(self.pairs(model)["m1"] / self.pairs(model)["m2"])
-            b.append(float(coulomb.impact_parameter(np.arccos(-1.0 / x), distance)))
+            b.append(float(coulomb.impact_parameter(np.arccos(-pr["m2"] / pr["m1"]), distance)))
         return np.array(b), np.zeros(len(b))
 
     def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
+        self.place(model, data, 0)
+
+    def place(self, model: mujoco.MjModel, data: mujoco.MjData, block: int) -> None:
+        """Put every pair of `data` on its exact incoming orbit (`coulomb.relative_orbit`), from the compiled model's
+        masses, k, speed and separation; a beam's impact points are block `block`'s."""
         pr = self.pairs(model)
         m1, m2, k = pr["m1"], pr["m2"], pr["k"]
         mass = m1 + m2
-        u = float(params["speed"])
+        u = float(model.numeric("speed").data[0])
         d = coulomb.distance_scale(k, m1 * m2 / mass, u)
-        b, azimuth = self._impacts(model, d)
+        b, azimuth = self._impacts(model, d, block)
         # Every pair passes its closest approach at the same time, t_half after the start: the time the pair that
-        # comes closest takes from `separation` r_min to r_min.
-        b_close = 0.0 if int(model.numeric("samples").data[0]) > BEAM_SINGLE else float(b[0])
+        # comes closest (a beam's head-on one) takes from `separation` r_min to r_min.
+        b_close = 0.0 if self.is_beam(model) else float(b[0])
         rmin = float(coulomb.closest_approach(b_close, d))
-        t_half = coulomb.time_at_separation(float(params["separation"]) * rmin, b_close, d, u)
+        t_half = coulomb.time_at_separation(float(model.numeric("separation").data[0]) * rmin, b_close, d, u)
         data.qpos[:] = model.qpos0
         data.qvel[:] = 0.0
-        s = self.split(pr, data.qpos, data.qvel)
         cm_velocity = np.array([m1 * u / mass, 0.0, 0.0])
         r, v = coulomb.relative_orbit(-t_half, b, d, u)  # every pair at once, in its own scattering plane
         c, sn = np.cos(azimuth), np.sin(azimuth)  # the plane turned by the azimuth about the beam (x)
         r = np.stack([r[:, 0], c * r[:, 1] - sn * r[:, 2], sn * r[:, 1] + c * r[:, 2]], axis=1)
         v = np.stack([v[:, 0], c * v[:, 1] - sn * v[:, 2], sn * v[:, 1] + c * v[:, 2]], axis=1)
         centre = -t_half * cm_velocity  # the CM passes the origin at the closest approach
-        s["x1"][:], s["x2"][:] = centre + (m2 / mass) * r, centre - (m1 / mass) * r
-        s["v1"][:], s["v2"][:] = cm_velocity + (m2 / mass) * v, cm_velocity - (m1 / mass) * v
-        # `split` returns copies (fancy indexing): write them back.
         q3 = np.arange(3)
-        data.qpos[pr["projectile_q"][:, None] + q3] = s["x1"]
-        data.qpos[pr["target_q"][:, None] + q3] = s["x2"]
-        data.qvel[pr["projectile_v"][:, None] + q3] = s["v1"]
-        data.qvel[pr["target_v"][:, None] + q3] = s["v2"]
+        data.qpos[pr["projectile_q"][:, None] + q3] = centre + (m2 / mass) * r
+        data.qpos[pr["target_q"][:, None] + q3] = centre - (m1 / mass) * r
+        data.qvel[pr["projectile_v"][:, None] + q3] = cm_velocity + (m2 / mass) * v
+        data.qvel[pr["target_v"][:, None] + q3] = cm_velocity - (m1 / mass) * v
 
     # ---- prediction -------------------------------------------------------------------------------------------
 
@@ -562,7 +574,8 @@ class Rutherford(Scenario):
             "_t_half": t_half,
             "_t0": float(data.time),
             "_duration": 2 * t_half,
-            "_beam": int(model.numeric("samples").data[0]) > BEAM_SINGLE,
+            "_beam": self.is_beam(model),
+            "_n": int(model.numeric("samples").data[0]),
             "_energy0": inv["energy"],
             "_momentum0": inv["momentum"],
             "_incoming": coulomb.incoming_direction(inv["r"], inv["rdot"], kappa),
@@ -621,14 +634,34 @@ class Rutherford(Scenario):
     def simulate(
         self, model: mujoco.MjModel, data: mujoco.MjData, duration: float, *, control: np.ndarray | None = None
     ):
-        if int(model.numeric("samples").data[0]) <= BEAM_SINGLE:
+        if not self.is_beam(model):
             return simulate(model, data, duration, control=control)
-        return _march(model, data, round(duration / model.opt.timestep))
+        nstep = round(duration / model.opt.timestep)
+        count = self.pairs(model)["count"]
+        n = int(model.numeric("samples").data[0])
+        blocks = []
+        for j in range(-(-n // count)):
+            if j == 0:
+                start = data  # the state the prediction was made from
+            else:
+                start = mujoco.MjData(model)
+                self.place(model, start, j)
+                mujoco.mj_forward(model, start)
+            run = _march(model, start, nstep)
+            blocks.append((run, min(count, n - j * count)))
+            if run.diverged_at is not None:
+                break
+        first = blocks[0][0]
+        bad = next((r.diverged_at for r, _ in blocks if r.diverged_at is not None), None)
+        return Beam(first.time, first.qpos, first.qvel, bad, tuple(blocks))
 
-    def outgoing(self, prediction: Mapping[str, Any], qpos: np.ndarray, qvel: np.ndarray) -> dict[str, np.ndarray]:
+    def outgoing(
+        self, prediction: Mapping[str, Any], qpos: np.ndarray, qvel: np.ndarray, incoming: np.ndarray | None = None
+    ) -> dict[str, np.ndarray]:
         """Per pair, from a state row (any time after the start): the CM angle theta between the asymptotes (the
-        outgoing one read from the state's Runge-Lenz vector), the LAB asymptotic velocities v1, v2 and their angles
-        psi, zeta from the beam (+x), the outgoing direction, and the invariants (`_invariants`)."""
+        outgoing one read from the state's Runge-Lenz vector; the incoming one `incoming`, by default the
+        prediction's, from the initial state), the LAB asymptotic velocities v1, v2 and their angles psi, zeta from
+        the beam (+x), the outgoing direction, and the invariants (`_invariants`)."""
         pr = prediction["_pairs"]
         kappa = prediction["_kappa"]
         m1, m2 = pr["m1"], pr["m2"]
@@ -641,7 +674,7 @@ class Rutherford(Scenario):
         v2 = cm_velocity - (m1 / (m1 + m2)) * rel
         beam_axis = np.array([1.0, 0.0, 0.0])
         return {
-            "theta": _angle(out_dir, prediction["_incoming"]),
+            "theta": _angle(out_dir, prediction["_incoming"] if incoming is None else incoming),
             "psi": _angle(v1, beam_axis),
             "zeta": _angle(v2, beam_axis),
             "v1": v1,
@@ -685,8 +718,33 @@ class Rutherford(Scenario):
             if times is not None:
                 result.update(self._drift(traj, pr, prediction, times, out_dir[0], inv["speed"][0]))
         else:
-            result.update(self._distributions(model, prediction, theta, psi, zeta))
+            result.update(self._beam_result(model, traj, prediction))
         return result
+
+    def _beam_result(self, model: mujoco.MjModel, traj: Beam, prediction: Mapping[str, Any]) -> dict[str, float]:
+        """Every block of the beam: each pair's deflection against C7 from its own initial state, energy and momentum,
+        and the goodness-of-fit tests over all the collisions."""
+        pr, kappa = prediction["_pairs"], prediction["_kappa"]
+        parts = {"theta": [], "psi": [], "zeta": [], "error": [], "energy": [], "momentum": []}
+        for run, count in traj.blocks:
+            inv0 = _invariants(self.split(pr, run.qpos[0], run.qvel[0]), pr["m1"], pr["m2"], kappa)
+            incoming = coulomb.incoming_direction(inv0["r"], inv0["rdot"], kappa)
+            out = self.outgoing(prediction, run.qpos[-1], run.qvel[-1], incoming)
+            inv = out["invariants"]
+            expected = coulomb.cm_angle(inv0["b"], inv0["distance"])
+            for name in ("theta", "psi", "zeta"):
+                parts[name].append(out[name][:count])
+            parts["error"].append(np.abs(out["theta"] - expected)[:count])
+            parts["energy"].append((np.abs(inv["energy"] - inv0["energy"]) / inv0["energy"])[:count])
+            dp = np.linalg.norm(inv["momentum"] - inv0["momentum"], axis=-1)
+            parts["momentum"].append((dp / np.linalg.norm(inv0["momentum"], axis=-1))[:count])
+        cat = {k: np.concatenate(v) for k, v in parts.items()}
+        return {
+            "beam-cm-angle": float(cat["error"].max()),
+            "energy": float(cat["energy"].max()),
+            "momentum": float(cat["momentum"].max()),
+            **self._distributions(model, prediction, cat["theta"], cat["psi"], cat["zeta"]),
+        }
 
     @staticmethod
     def _closest(traj, pr: Mapping[str, Any]) -> float:
@@ -811,12 +869,15 @@ def _drift_fits(times, r, theta, m1, m2, speed) -> dict[str, float]:
 
 @dataclass(frozen=True)
 class Beam:
-    """A beam's run: the sample times of the run, and its first and last states (rows 0 and 1 of qpos, qvel)."""
+    """A beam's run: the sample times of one block's run, the first block's first and last states (rows 0 and 1 of
+    qpos, qvel), and every block's run with the number of its pairs that belong to the beam (the last block's
+    surplus pairs are simulated, not counted)."""
 
     time: np.ndarray
     qpos: np.ndarray
     qvel: np.ndarray
     diverged_at: float | None
+    blocks: tuple = ()
 
 
 # Steps per rollout call of a beam: rollout records every step (nstep x nstate doubles), so a long run of a big

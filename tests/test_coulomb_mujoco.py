@@ -10,7 +10,7 @@ import pytest
 
 from rigidbench import forces
 from rigidbench.analytic import coulomb
-from rigidbench.envs.rutherford import Rutherford
+from rigidbench.envs.rutherford import BLOCK, Rutherford
 from rigidbench.scenario import OutsideDomain
 from rigidbench.settings import Settings
 
@@ -70,6 +70,15 @@ def test_beam_is_one_model_of_independent_pairs():
     radius = coulomb.beam_radius(float(prep.model.numeric("min_angle").data[0]), d)
     assert b.max() <= radius and b.min() >= 0 and b.max() > 0.9 * radius
     run = SCENARIO.run("cross-section", {"n": 200})
+    assert all(o.passed for o in run.outcomes), [(o.check.name, o.measured) for o in run.outcomes]
+
+
+def test_a_beam_larger_than_a_block_runs_in_blocks_of_one_model():
+    """n = 620 > BLOCK: one compiled model of BLOCK pairs, stepped twice from two draws; 620 collisions counted."""
+    run = SCENARIO.run("cross-section", {"n": 620}, keep_trajectory=True)
+    blocks = run.trajectory.blocks
+    assert [count for _, count in blocks] == [BLOCK, 620 - BLOCK]
+    assert not np.array_equal(blocks[0][0].qpos[0], blocks[1][0].qpos[0])  # each block its own impact points
     assert all(o.passed for o in run.outcomes), [(o.check.name, o.measured) for o in run.outcomes]
 
 
