@@ -43,13 +43,15 @@ def _deflection(ctx: PlotContext, beam, singles) -> list[Figure]:
     got = _beam_angles(ctx, beam)
     b = np.linspace(0.0, max(got["b"].max(), 4.0) * 1.02, 600)
     theta = coulomb.cm_angle(b, 1.0)
-    fig, ((ax, lab), (res, _spare)) = ctx.subplots(2, 2, sharex=True, height_ratios=(2.2, 1.4), figsize=(10.5, 6.4))
+    fig, ((ax, lab), (res, _spare)) = ctx.subplots(2, 2, height_ratios=(2.2, 1.4), figsize=(10.5, 6.4))
     _spare.axis("off")
+    res.sharex(ax)
     ax.plot(b, theta, label="C7: theta = 2 arctan(D / b)", **THEORY_STYLE)
     ax.plot(got["b"], got["theta"], ".", color="C0", ms=3, label=f"MuJoCo, the beam's {len(got['b'])} pairs")
     for i, (case, run) in enumerate(singles):
         bb = run.prediction["_b"][0] / run.prediction["_distance"]
-        ax.plot(bb, measured_value(run, "cm-angle"), "o", color=f"C{i + 1}", ms=6, mec="k", label=f"MuJoCo, {case}")
+        theta_i = ctx.scenario.outgoing(run.prediction, run.trajectory.qpos[-1], run.trajectory.qvel[-1])["theta"][0]
+        ax.plot(bb, theta_i, "o", color=f"C{i + 1}", ms=6, mec="k", label=f"MuJoCo, {case}")
     ax.set_ylabel("CM scattering angle theta (rad)")
     ax.set_title(f"rutherford: deflection function ({settings_text(beam)})", fontsize=9)
     ax.legend(fontsize=8)
@@ -68,6 +70,7 @@ def _deflection(ctx: PlotContext, beam, singles) -> list[Figure]:
     lab.plot(got["b"], got["psi"], ".", color="C0", ms=3, label="MuJoCo psi (beam)")
     lab.plot(got["b"], got["zeta"], ".", color="C3", ms=3, label="MuJoCo zeta (beam)")
     lab.set_ylabel("LAB angle (rad)")
+    lab.set_xlabel("impact parameter b / D")
     lab.legend(fontsize=8)
     lab.set_title(f"LAB angles of the beam (m2 = {pr['m2'] / pr['m1']:.3g} m1)", fontsize=9)
     return [
