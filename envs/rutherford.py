@@ -21,7 +21,6 @@ Conventions: the target is the pair's first body, r = r_projectile - r_target (k
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -32,8 +31,8 @@ import numpy as np
 
 from rigidbench import forces, signals
 from rigidbench.analytic import coulomb, scattering
-from rigidbench.envs.base import ScenarioEnv
 from rigidbench.envs.cross_section import MIN_EXPECTED, bin_counts, chi_square_pvalue
+from rigidbench.envs.pair import FreePairEnv
 from rigidbench.params import BodyMass, Bound, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.simulate import final_states, get_state, simulate
@@ -902,7 +901,7 @@ def _march(model: mujoco.MjModel, data: mujoco.MjData, nstep: int) -> Beam:
     return Beam(time, qpos, qvel, float(time[done]) if diverged else None)
 
 
-class RutherfordEnv(ScenarioEnv):
+class RutherfordEnv(FreePairEnv):
     """``rigidbench/Rutherford-v0``: one Coulomb collision of two free bodies, scored against the exact orbit.
 
     Description
@@ -954,55 +953,24 @@ class RutherfordEnv(ScenarioEnv):
 
     scenario_cls = Rutherford
     default_frame_skip: ClassVar[int] = 20
-    observables: ClassVar[tuple[str, ...]] = ("r_x", "r_y", "r_z")
 
     def _load(self, case: str, params) -> None:
         super()._load(case, params)
         pr = self.prediction["_pairs"]
         q = (int(pr["projectile_q"][0]), int(pr["target_q"][0]))
         v = (int(pr["projectile_v"][0]), int(pr["target_v"][0]))
-        self._slices = (("qpos", q[0]), ("qpos", q[1]), ("qvel", v[0]), ("qvel", v[1]))
+        self._slices = self._pair_slices(q[0], q[1], v[0], v[1])
         self._body_id = int(forces.inverse_square(self.model).second[0])
         self._scale = float(coulomb.closest_approach(float(self.prediction["_b"][0]), self.prediction["_distance"]))
         self._start_views()
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        """A copy or an unpickled env holds new MjModel objects, which MuJoCo's passive callback does not know yet:
-        attach them (`rigidbench.forces.attach`), or the copy would step without the Coulomb force."""
-        super().__setstate__(state)
-        for model in (self.model, *self._models.values()):
-            forces.attach(model)
 
     def _action_space(self) -> gym.spaces.Box:
         p = self.params
         force = p["m1"] * p["speed"] ** 2 / (4 * _distance(p))
         return gym.spaces.Box(-force, force, shape=(3,), dtype=np.float64)
 
-    def _observation_space(self) -> gym.spaces.Box:
-        return gym.spaces.Box(-np.inf, np.inf, shape=(12,), dtype=np.float64)
-
-    def _bind_views(self) -> None:
-        data = self.data
-        self._obs_views = tuple(getattr(data, array)[start : start + 3] for array, start in self._slices)
-        self._force = data.xfrc_applied[self._body_id, :3]
-
-    def _observation(self) -> np.ndarray:
-        return np.concatenate(self._obs_views)
-
-    def _apply_action(self, action: np.ndarray) -> None:
-        self._force[:] = action
-
     def _theory(self, t: np.ndarray) -> np.ndarray:
         p = self.prediction
         tt = np.atleast_1d(np.asarray(t, dtype=float)) - p["_t0"] - p["_t_half"]
         r, _ = coulomb.relative_orbit(tt, float(p["_b"][0]), p["_distance"], p["_speed"])
         return r
-
-    def _measure(self, obs: np.ndarray) -> list[float]:
-        o = obs.tolist()
-        return [o[0] - o[3], o[1] - o[4], o[2] - o[5]]
-
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
-        (m1, m2, m3), (p1, p2, p3) = measured, predicted
-        d1, d2, d3 = m1 - p1, m2 - p2, m3 - p3
-        return math.sqrt(d1 * d1 + d2 * d2 + d3 * d3) / self._scale

@@ -590,44 +590,6 @@ class CWorlds(Worlds):
             mujoco.mj_getState(self.model, scratch, state[i], _INTEGRATION)
 
 
-class LoopWorlds(Worlds):
-    """C MuJoCo for a model whose forces a Python passive callback adds (`rigidbench.forces`), which
-    `mujoco.batch` refuses: one MjData per world, each stepped by `mj_step` in turn (bit for bit what a single env
-    does; the callback holds the GIL, so threads would gain nothing, `forces.threads_for`). The state and input
-    arrays are host copies, written into the worlds before each `step` (inputs) and read back after it (state)."""
-
-    def __init__(self, model: mujoco.MjModel, nworld: int) -> None:
-        from rigidbench import forces
-
-        self.model, self.nworld = model, int(nworld)
-        forces.attach(model)
-        self._datas = [mujoco.MjData(model) for _ in range(self.nworld)]
-        n = self.nworld
-        self.qpos, self.qvel, self.time = np.zeros((n, model.nq)), np.zeros((n, model.nv)), np.zeros(n)
-        self.ctrl, self.qfrc_applied = np.zeros((n, model.nu)), np.zeros((n, model.nv))
-        self.xfrc_applied = np.zeros((n, model.nbody, 6))
-        self._row = np.empty(mujoco.mj_stateSize(model, _INTEGRATION))
-        for i in range(n):
-            self._read(i)
-
-    def _read(self, i: int) -> None:
-        d = self._datas[i]
-        self.qpos[i], self.qvel[i], self.time[i] = d.qpos, d.qvel, d.time
-        self.ctrl[i], self.qfrc_applied[i], self.xfrc_applied[i] = d.ctrl, d.qfrc_applied, d.xfrc_applied
-
-    def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
-        mujoco.mj_getState(self.model, data, self._row, _INTEGRATION)
-        for i in np.atleast_1d(ids):
-            mujoco.mj_setState(self.model, self._datas[int(i)], self._row, _INTEGRATION)
-            self._read(int(i))
-
-    def step(self, nstep: int) -> None:
-        for i, d in enumerate(self._datas):
-            d.ctrl[:], d.qfrc_applied[:], d.xfrc_applied[:] = self.ctrl[i], self.qfrc_applied[i], self.xfrc_applied[i]
-            mujoco.mj_step(self.model, d, nstep)
-            self.qpos[i], self.qvel[i], self.time[i] = d.qpos, d.qvel, d.time
-
-
 class HostWorlds(Worlds):
     """Worlds an engine keeps on its device (MJX, Warp): float64 host copies of what the envs read and write, the
     state of the loaded worlds written into them by `_load_host`, and the step count as the clock (`clock`)."""
@@ -792,10 +754,6 @@ def worlds(engine: Engine | None, model: mujoco.MjModel, nworld: int, *, nthread
     if int(nworld) < 1:
         raise ValueError(f"num_envs = {nworld!r} must be an integer >= 1")
     if engine is None:
-        from rigidbench import forces
-
-        if forces.declared(model):  # a Python passive callback, which mujoco.batch refuses
-            return LoopWorlds(model, nworld)
         return CWorlds(model, nworld, nthread=nthread)
     engine.check(model)
     if isinstance(engine, MjxEngine):

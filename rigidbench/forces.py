@@ -3,7 +3,9 @@
 MuJoCo has no inverse-square force between bodies (no element, no first-party plugin), and a tendon or actuator
 force is at most affine in the length. The route kept here is MuJoCo's passive-force callback
 (``mjcb_passive``): `mj_passive` calls it inside every `mj_forward`, so RK4 evaluates the force at each of its
-four stages from the stage's own positions, and `mj_step`, `mujoco.rollout` and `mujoco.batch` all see it. A
+four stages from the stage's own positions, and `mj_step` and `mujoco.rollout` see it (`mujoco.batch` refuses to
+step at all while a Python callback is installed, for any model: `rigidbench.engines.CWorlds` then steps its worlds
+one at a time). A
 force written into ``xfrc_applied`` between steps from Python is instead held constant over each step, which makes
 any integrator first order in it (`tests/test_forces.py` measures both). A compiled plugin would avoid Python
 but needs a C toolchain and MuJoCo's headers at install time, which a pip install of this package must not.
@@ -13,6 +15,8 @@ What the route costs (measured on this 2-core machine, `tests/test_forces.py` ke
 - the callback is Python, so each `mj_forward` pays a Python call: about 9 us per RK4 stage for one pair;
 - it holds the GIL, so `mujoco.rollout` on several threads serialises on it (several times slower than one
   thread): `threads_for` gives one thread to a model that declares a force here;
+- a copied model (``copy.copy``, pickling) is a new model that `attach` has not seen: it steps without the force
+  until attached (the envs' ``__setstate__`` and the simulation seams attach what they step);
 - ``mjcb_passive`` is global to the process. It is installed only while a model declaring a force is alive
   (`attach`, called where rigidbench compiles or steps a model) and removed with the last such model; while
   installed, every other model's `mj_forward` pays a cheap lookup and returns. Another library's passive callback
