@@ -187,7 +187,9 @@ def theory_sensitivity(scenario: Scenario, quantity: Quantity, settings: Setting
             prep = scenario.prepare(case.name, None, settings)
             model = prep.model
             perturbed = _copy(model)
-            quantity.scale(perturbed, delta)
+            # By name in this case's own model (its bodies may differ from the model the quantity was listed from;
+            # a case whose model lacks it is left unperturbed, as in `Perturbation`).
+            Perturbation(quantity.name, delta)(perturbed)
             try:
                 other = scenario.predict(perturbed, scenario.start(perturbed, prep.params))
             except Exception:  # noqa: BLE001 - a prediction the perturbation makes undefined moved, by definition
