@@ -125,3 +125,17 @@ def test_bad_inputs_are_refused_before_simulating(case, overrides, match):
 def test_an_equal_mass_projectile_stopped_head_on_is_outside_the_domain():
     with pytest.raises(OutsideDomain, match="projectile-at-rest"):
         SCENARIO.resolve(SCENARIO.case("equal-mass"), {"b": 0.0})
+
+
+def test_power_theory_sensitivity_finds_a_quantity_in_each_cases_own_model(monkeypatch):
+    """`rigidbench power` lists the quantities of every case; rutherford's cases have different bodies (a beam of
+    pairs, a probe pair, one pair), so the theory's sensitivity perturbs each case's model by the quantity's name,
+    and a case without it is left as it is (it once indexed a body the single-pair models do not have)."""
+    from rigidbench import power, registry
+
+    monkeypatch.setattr(power, "DELTAS", (1e-2,))
+    scenario = registry.get("rutherford")
+    names = {q.name for sc, q in power.plan(["rutherford"], None) if sc is scenario}
+    assert {"mass:projectile", "mass:target", "mass:target1"} <= names
+    quantity = next(q for sc, q in power.plan(["rutherford"], None) if q.name == "mass:target1")
+    assert power.theory_sensitivity(scenario, quantity, None) in (None, 1e-2)
