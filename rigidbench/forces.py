@@ -76,7 +76,10 @@ class InverseSquare:
         """The force on each pair's second body (N, world frame), shape (npair, 3); the first feels minus it."""
         r = xipos[self.second] - xipos[self.first]
         dist = np.sqrt(np.einsum("ij,ij->i", r, r))
-        return (self.k / dist**3)[:, None] * r
+        # A coincident pair (the model's qpos0 before a scenario places its bodies, e.g. when dm_control resets a
+        # physics) has no direction: no force, rather than NaN in qfrc_passive.
+        scale = np.divide(self.k, dist**3, out=np.zeros_like(dist), where=dist > 0)
+        return scale[:, None] * r
 
     def potential_energy(self, xipos: np.ndarray) -> float:
         """sum of k / |r| over the pairs (J)."""

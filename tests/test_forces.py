@@ -203,3 +203,14 @@ def test_free_body_fast_path_equals_mj_applyFT():
     general[:] = data.qfrc_passive
     np.testing.assert_allclose(fast, general, rtol=1e-14, atol=1e-15)
     assert np.any(fast != 0)
+
+
+def test_a_coincident_pair_feels_no_force_rather_than_nan():
+    """At r = 0 the inverse-square force has no direction (a model's qpos0 can put both bodies at the origin before a
+    scenario places them): zero, so qfrc_passive stays finite."""
+    pair = forces.InverseSquare(np.array([1]), np.array([2]), np.array([K]))
+    xipos = np.zeros((3, 3))
+    with np.errstate(all="raise"):
+        np.testing.assert_array_equal(pair.forces(xipos), 0.0)
+    xipos[2] = [2.0, 0.0, 0.0]
+    np.testing.assert_allclose(pair.forces(xipos)[0], [K / 4, 0.0, 0.0])
