@@ -124,20 +124,8 @@ class EastwardDeflection(Scenario):
             Range(0.1, 1e4),
             DropHeight(),
         ),
-        Param(
-            "g",
-            "m/s^2",
-            "gravity, fixed in the platform's axes along its -z (local down)",
-            Range(0.1, 100.0),
-            rotating.PlatformGravity(),
-        ),
-        Param(
-            "latitude",
-            "rad",
-            "latitude lambda: the platform turns about (0, cos lambda, sin lambda) in its East-North-Up axes",
-            Range(-math.pi / 2, math.pi / 2),
-            rotating.Latitude(),
-        ),
+        rotating.GRAVITY,
+        rotating.LATITUDE,
         Param(
             "rate",
             "rad/s",

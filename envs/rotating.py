@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 from rigidbench import forces
-from rigidbench.params import Value
+from rigidbench.params import Param, Range, Value
 
 PLATFORM, SPIN = "platform", "spin"
 
@@ -46,6 +46,24 @@ class PlatformGravity:
 
     def read(self, model: mujoco.MjModel) -> Value:
         return float(-model.numeric(forces.FRAME_FIELD).data[2])
+
+
+# The parameters every rotating-platform scenario has (the rate's range differs: each scenario bounds it by its
+# own theory's domain).
+GRAVITY = Param(
+    "g",
+    "m/s^2",
+    "gravity, fixed in the platform's axes along its -z (local down)",
+    Range(0.1, 100.0),
+    PlatformGravity(),
+)
+LATITUDE = Param(
+    "latitude",
+    "rad",
+    "latitude lambda: the platform turns about (0, cos lambda, sin lambda) in its East-North-Up axes",
+    Range(-np.pi / 2, np.pi / 2),
+    Latitude(),
+)
 
 
 @dataclass(frozen=True)
