@@ -1,6 +1,8 @@
 """Batched vector envs against their engine's raw batched stepping and against gymnasium's SyncVectorEnv.
 
-For each env, engine and N, three rates in env-steps per second (N copies x vector steps / s), zero actions:
+For each env, engine and N, three rates in env-steps per second (N copies x vector steps / s), zero actions (the
+textbook problem, whose physics the raw step times; ``--actions random`` gives a new small random action every step,
+as an agent would):
 
 * ``raw``: the engine alone stepping N worlds of the env's model ``frame_skip`` steps per call
   (`rigidbench.engines.Worlds.raw_step`: C MuJoCo's `mujoco.batch`, MJX's jitted scan, Warp's captured graph),
@@ -68,15 +70,25 @@ def raw_worlds(env_id: str, n: int, engine, frame_skip: int | None):
     return worlds, step
 
 
-def vector_env(env_id: str, n: int, mode: str, frame_skip: int | None, **engine_kwargs):
+def vector_env(env_id: str, n: int, mode: str, frame_skip: int | None, actions: str = "zero", **engine_kwargs):
     kwargs = {} if frame_skip is None else {"frame_skip": frame_skip}
     if mode == "sync":
         envs = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync", **kwargs)
     else:
         envs = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs, **engine_kwargs)
     envs.reset(seed=0)
-    actions = np.zeros(envs.action_space.shape)
-    return envs, lambda: envs.step(actions)
+    if actions == "zero":
+        zero = np.zeros(envs.action_space.shape)
+        return envs, lambda: envs.step(zero)
+    # A tenth of the action space, new every step (drawn beforehand and cycled, so drawing costs nothing here).
+    pool = np.random.default_rng(0).uniform(-0.1, 0.1, (16, *envs.action_space.shape)).astype(np.float32)
+    count = [0]
+
+    def step():
+        count[0] += 1
+        return envs.step(pool[count[0] % len(pool)])
+
+    return envs, step
 
 
 def main() -> None:
@@ -90,6 +102,7 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=1.0)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--no-sync", action="store_true", help="skip SyncVectorEnv (slow to build at N = 1024)")
+    parser.add_argument("--actions", choices=("zero", "random"), default="zero")
     parser.add_argument("--json", default=None)
     args = parser.parse_args()
     print(
@@ -109,10 +122,10 @@ def main() -> None:
             for n in args.ns:
                 built = {
                     "raw": raw_worlds(env_id, n, engine, args.frame_skip),
-                    "batched": vector_env(env_id, n, "batched", args.frame_skip, **kw),
+                    "batched": vector_env(env_id, n, "batched", args.frame_skip, args.actions, **kw),
                 }
                 if engine is None and not args.no_sync:
-                    built["sync"] = vector_env(env_id, n, "sync", args.frame_skip)
+                    built["sync"] = vector_env(env_id, n, "sync", args.frame_skip, args.actions)
                 rates: dict[str, list[float]] = {key: [] for key in built}
                 for _ in range(args.rounds):
                     for key, (_, step) in built.items():

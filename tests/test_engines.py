@@ -185,8 +185,9 @@ def test_mjx_device_it_does_not_have_is_one_line(capsys):
 @pytest.mark.parametrize("vector_id", ["rigidbench/SimplePendulum-v0", "rigidbench/CoupledPendulums-v0"])
 def test_batched_vector_env_on_a_float32_engine_follows_c_within_its_floor(name, vector_id):
     """A batched vector env on Warp or MJX (float32) against gymnasium's sync vector env of the same env on C
-    MuJoCo, with the same actions: every observation within the float32 round-off floor of the steps taken (the
-    random walk `roundoff_floor`, scale the observation's size, at least 1), and the same episode ends."""
+    MuJoCo, with the same actions, each held for three steps: every observation within the float32 round-off floor of
+    the steps taken (the random walk `roundoff_floor`, scale the observation's size, at least 1), and the same
+    episode ends."""
     pytest.importorskip({"warp": "mujoco_warp", "mjx": "mujoco.mjx"}[name])
     import gymnasium as gym
 
@@ -198,7 +199,8 @@ def test_batched_vector_env_on_a_float32_engine_follows_c_within_its_floor(name,
     frame_skip = batched.unwrapped.env.frame_skip
     rng = np.random.default_rng(0)
     for k in range(1, calls + 1):
-        actions = rng.uniform(-0.5, 0.5, sync.action_space.shape) * sync.single_action_space.high
+        if k % 3 == 1:  # held for three steps: a repeated action as well as a new one
+            actions = rng.uniform(-0.5, 0.5, sync.action_space.shape) * sync.single_action_space.high
         obs_c, _, term_c, trunc_c, _ = sync.step(actions)
         obs_e, _, term_e, trunc_e, info = batched.step(actions)
         floor, _ = roundoff_floor("float32", k * frame_skip, 1.0)
