@@ -271,6 +271,17 @@ MIN_HITS = 50
 _HARD = {p.name: p for p in HardSpheres.params}
 
 
+# The seed of a beam's impact points (the custom numeric ``seed``), shared by the Monte Carlo scenarios.
+BEAM_SEED = Param(
+    "seed",
+    "1",
+    "seed of the numpy Generator drawing the beam's impact points",
+    Range(0, 2**53),
+    Numeric("seed"),
+    integer=True,
+)
+
+
 class CrossSection(Scenario):
     """A uniform beam of `n` smooth elastic sphere collisions: CM and LAB angular distributions as
     goodness-of-fit tests, and the total cross section from the hit fraction (THEORY.md C5, C6)."""
@@ -303,14 +314,7 @@ class CrossSection(Scenario):
             integer=True,
             budget=True,
         ),
-        Param(
-            "seed",
-            "1",
-            "seed of the numpy Generator drawing the impact points",
-            Range(0, 2**53),
-            Numeric("seed"),
-            integer=True,
-        ),
+        BEAM_SEED,
         Param(
             "margin",
             "1",

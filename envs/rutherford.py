@@ -31,7 +31,7 @@ import numpy as np
 
 from rigidbench import forces, signals
 from rigidbench.analytic import coulomb, scattering
-from rigidbench.envs.cross_section import MIN_EXPECTED, bin_counts, chi_square_pvalue
+from rigidbench.envs.cross_section import BEAM_SEED, MIN_EXPECTED, bin_counts, chi_square_pvalue
 from rigidbench.envs.pair import FreePairEnv
 from rigidbench.params import BodyMass, Bound, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
@@ -310,14 +310,7 @@ class Rutherford(Scenario):
             integer=True,
             budget=True,
         ),
-        Param(
-            "seed",
-            "1",
-            "seed of the numpy Generator drawing the beam's impact points",
-            Range(0, 2**53),
-            Numeric("seed"),
-            integer=True,
-        ),
+        BEAM_SEED,
         Param(
             "min_angle",
             "rad",
