@@ -133,8 +133,10 @@ def cm_angles_of_projectile(psi: ArrayLike, mass_ratio: float) -> tuple[np.ndarr
     psi = np.asarray(psi, dtype=float)
     x = mass_ratio
     arg = x * np.sin(psi)
-    ok = np.abs(arg) <= 1.0
-    asin = np.arcsin(np.where(ok, arg, 0.0))
+    # At psi_max = arcsin(1/x) itself, x sin(psi) can round to just above 1 (x = 2.01479, 8.01907): both branches
+    # meet there (theta = arccos(-1/x)), so a few ulps over count as the limit, not beyond it.
+    ok = np.abs(arg) <= 1.0 + 8 * np.finfo(float).eps
+    asin = np.arcsin(np.clip(np.where(ok, arg, 0.0), -1.0, 1.0))
     stretch = np.where(ok, psi + asin, np.nan)
     short = np.where(ok & (x > 1), psi + np.pi - asin, np.nan)
     return stretch, short

@@ -572,6 +572,9 @@ class Rutherford(Scenario):
             "_energy0": inv["energy"],
             "_momentum0": inv["momentum"],
             "_incoming": coulomb.incoming_direction(inv["r"], inv["rdot"], kappa),
+            # Pair 0's scattering plane, turned about the beam axis x (a beam's pairs come at random azimuths): the
+            # plane holds x, so the transverse part of its r points along its impact offset (the env's theory).
+            "_azimuth": float(np.arctan2(inv["r"][0, 2], inv["r"][0, 1])),
             "cm-angle": float(theta[0]),
             "projectile-lab-angle": float(psi[0]),
             "target-lab-angle": float(zeta[0]),
@@ -792,10 +795,11 @@ class Rutherford(Scenario):
 
 def beam_bins(min_angle: float, mass_ratio: float) -> dict[str, np.ndarray]:
     """Bin edges (rad) of the beam's three goodness-of-fit tests: equal probability in theta; equal widths in psi
-    over [psi(theta_min), psi_top] and in zeta over [0, (pi - theta_min) / 2] (the top edge is the largest angle;
-    `bin_counts` closes the top bin, so the head-on pair's psi = pi or zeta = 0 counts)."""
+    over [psi(theta_min), psi_top] (from 0 for m1 > m2, whose short branch sends near-head-on collisions to psi -> 0)
+    and in zeta over [0, (pi - theta_min) / 2] (the top edge is the largest angle; `bin_counts` closes the top bin,
+    so the head-on pair's psi = pi or zeta = 0 counts)."""
     x = mass_ratio
-    psi_low = float(scattering.lab_angles(min_angle, x)[0])
+    psi_low = float(scattering.lab_angles(min_angle, x)[0]) if x <= 1 else 0.0
     psi_top = scattering.max_lab_angle(x) if x > 1 else (np.pi / 2 if x == 1 else np.pi)
     return {
         "cm": coulomb.equal_probability_edges(NBINS, min_angle),
@@ -966,4 +970,5 @@ class RutherfordEnv(FreePairEnv):
         p = self.prediction
         tt = np.atleast_1d(np.asarray(t, dtype=float)) - p["_t0"] - p["_t_half"]
         r, _ = coulomb.relative_orbit(tt, float(p["_b"][0]), p["_distance"], p["_speed"])
-        return r
+        c, sn = np.cos(p["_azimuth"]), np.sin(p["_azimuth"])  # pair 0's plane (a beam's: a random azimuth)
+        return np.stack([r[:, 0], c * r[:, 1] - sn * r[:, 2], sn * r[:, 1] + c * r[:, 2]], axis=1)

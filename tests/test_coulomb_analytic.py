@@ -224,3 +224,16 @@ def test_small_mass_ratio_lab_formula_error_is_second_order():
 def test_time_at_separation_refuses_inside_the_closest_approach():
     with pytest.raises(ValueError, match="below the closest approach"):
         coulomb.time_at_separation(D, D, D, V)
+
+
+@pytest.mark.parametrize("x", [1.5, 2.0, 2.01479, 4.0, 8.01907, 0.5, 1.0])
+def test_beam_bins_cover_the_projectiles_whole_range(x):
+    """The beam's projectile bins hold every LAB angle the cut beam can give: for m1 > m2 from 0 (the short branch's
+    near-head-on collisions), and the top bin's probability is finite where x sin(psi_max) rounds above 1 (x =
+    2.01479, 8.01907)."""
+    from rigidbench.envs.rutherford import beam_bins
+
+    edges = beam_bins(0.5, x)["projectile"]
+    p = coulomb.lab_angle_probabilities(edges, 0.5, x)
+    assert np.all(np.isfinite(p)) and np.all(p >= 0)
+    assert p.sum() == pytest.approx(1.0, abs=1e-8)

@@ -139,3 +139,21 @@ def test_power_theory_sensitivity_finds_a_quantity_in_each_cases_own_model(monke
     assert {"mass:projectile", "mass:target", "mass:target1"} <= names
     quantity = next(q for sc, q in power.plan(["rutherford"], None) if q.name == "mass:target1")
     assert power.theory_sensitivity(scenario, quantity, None) in (None, 1e-2)
+
+
+def test_a_beam_env_follows_its_first_pairs_orbit_in_that_pairs_plane():
+    """A beam's env is scored on its first pair, which comes at a random azimuth about the beam: the theory is that
+    pair's orbit turned into its plane, so the textbook problem (zero action) deviates by RK4's error only (it was
+    0.43 r_min on the first step when the theory stayed in the x-y plane)."""
+    import gymnasium as gym
+
+    env = gym.make("rigidbench/Rutherford-v0", case="cross-section", params={"n": 100}).unwrapped
+    env.reset(seed=0)
+    assert abs(env.prediction["_azimuth"]) > 0.1  # this seed's first pair is well out of the x-y plane
+    deviations = []
+    for _ in range(30):
+        _, _, terminated, truncated, info = env.step(np.zeros(3, dtype=np.float32))
+        deviations.append(info["deviation"])
+        if terminated or truncated:
+            break
+    assert max(deviations) < 1e-7  # the single collisions' orbit checks hold 1e-7 rad; here 7.5e-10 r_min
