@@ -163,3 +163,44 @@ def test_gyroscopic_round_off_is_carried_by_the_tolerances_and_refused_beyond_it
         SCENARIO.resolve(
             SCENARIO.case("small-hunting"), {"Omega": 1e-3, "latitude": 1.5, "spin_rate": 1e4, "amplitude": 1e-4}
         )
+
+
+@pytest.mark.parametrize(
+    ("case", "params"),
+    [
+        # Near the separatrix, a small rotor on a heavy gimbal under a slow platform near the pole (a review's corners).
+        (
+            "large-hunting",
+            {
+                "amplitude": 3.0,
+                "Omega": 1e-3,
+                "latitude": 1.5,
+                "spin_rate": 1e4,
+                "I_transverse": 1e-4,
+                "I_axial": 2e-4,
+                "I_gimbal": 10.0,
+            },
+        ),
+        (
+            "small-hunting",
+            {
+                "amplitude": 0.01,
+                "Omega": 1e-3,
+                "latitude": 1.5,
+                "spin_rate": 1e4,
+                "I_transverse": 1e-4,
+                "I_axial": 1.8e-4,
+                "I_gimbal": 1.0,
+            },
+        ),
+    ],
+)
+def test_roundoff_floor_holds_at_the_ranges_corners(case, params):
+    """The gyroscopic round-off rho is taken at the turning point (sin|a|, not sin(min(|a|, pi/2)): 7x larger at
+    a = 3), and the hunting period's floor is scaled by its sensitivity to the amplitude (~5 there): these in-range
+    sets failed by up to 18x before, within their tolerances now."""
+    from rigidbench import runner
+
+    job = runner.plan([f"gyrocompass:{case}"], {k: repr(v) for k, v in params.items()}, None)[0]
+    rows = runner.run_job(job, None)
+    assert all(r["status"] == "pass" for r in rows), [(r["check"], r["error"], r["tolerance"]) for r in rows]
