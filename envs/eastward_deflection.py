@@ -36,9 +36,8 @@ STEPS_PER_FALL = 500
 # Largest x0 = Omega t0 accepted: the neglected terms' bound (3/8) x0^2 + x0^4 holds up to x0 = 0.5 (tested), and
 # at 0.3 it is 4.2 %.
 MAX_TURN = 0.3
-# The pole's check: the eastward displacement a field leaning by this angle (rad) from the platform's vertical
-# towards East would give, (1/3) Omega g t0^3 x angle; round-off is ~1e-15 m.
-POLE_LEAN = 1e-9
+# The pole's check: the compiled axis leans from the vertical by at most ~eps (cos(pi/2) rounds to 6e-17), which
+# would deflect the fall East by (1/3) Omega g t0^3 x that lean; + the positions' round-off 10 n eps h.
 # Round-off of the position (m): each of the n steps rounds positions up to h from the origin, by ~eps h; the
 # floor 10 n eps h (measured ~0.1 n eps h at the defaults).
 ROUNDOFF_FACTOR = 10
@@ -72,9 +71,10 @@ _PATH = (
     "(2.2e-11 m at the defaults)"
 )
 _POLE = (
-    f"at the pole Omega is vertical: no Coriolis force on a vertical fall and no centrifugal force on the axis, so the "
-    f"ball falls straight; the floor is the deflection a field leaning {POLE_LEAN:g} rad towards East would give, "
-    f"(1/3) Omega g t0^3 x {POLE_LEAN:g} (cos(pi/2) rounds to 6e-17), + round-off 10 n eps h"
+    "at the pole Omega is vertical: no Coriolis force on a vertical fall and no centrifugal force on the axis, so the "
+    "ball falls straight; the floor is the deflection the compiled axis's lean from the vertical (read back; at most "
+    "~eps: cos(pi/2) rounds to 6e-17) gives, (1/3) Omega g t0^3 x max(lean, eps), + round-off 10 n eps h (set per "
+    "run)"
 )
 CHECKS = (
     Check(
@@ -199,7 +199,8 @@ class EastwardDeflection(Scenario):
         n = round(duration / dt)
         roundoff = ROUNDOFF_FACTOR * n * np.finfo(float).eps * h
         d_e = rot.eastward_deflection(pl.rate, pl.g, h, pl.latitude)
-        tolerance = {"drop-path": roundoff, "pole-deflection": abs(pl.rate) * pl.g * t0**3 / 3 * POLE_LEAN + roundoff}
+        lean = max(math.atan2(math.hypot(pl.axis[0], pl.axis[1]), abs(pl.axis[2])), float(np.finfo(float).eps))
+        tolerance = {"drop-path": roundoff, "pole-deflection": abs(pl.rate) * pl.g * t0**3 / 3 * lean + roundoff}
         if d_e != 0 and abs(math.cos(pl.latitude)) > 1e-12:
             tolerance["eastward-deflection"] = rot.eastward_neglected_terms(pl.rate, pl.g, h) + roundoff / abs(d_e)
         return {

@@ -41,10 +41,9 @@ STEPS_PER_PERIOD = 200
 RATE_RATIO = (0.01, 0.05)
 # Equator: the swing's azimuth is fitted over this many periods.
 EQUATOR_PERIODS = 20
-# The equator's check: the rate at which a field leaning by this angle (rad) from the platform's vertical would
-# turn the swing plane, Omega x angle; round-off cannot turn it at all (measured 0: the swing's North components
-# stay exactly 0 by the symmetry of every operation on them).
-EQUATOR_LEAN = 1e-9
+# The equator's check: the compiled axis's sin(lambda) (read back; ~eps at most) turns the swing plane at Omega x
+# it; round-off cannot turn it at all (measured 0: the swing's North components stay exactly 0 by the symmetry of
+# every operation on them).
 
 _PRECESSION = (
     "each neglected term sized from the compiled model and the release (`analytic.rotating."
@@ -75,12 +74,13 @@ CHECKS = (
     Check(
         "equator-precession",
         "rad/s",
-        EQUATOR_LEAN * 0.06,
+        1e-17,
         "abs",
         f"on the equator Omega is horizontal and an East-West swing stays in its plane by symmetry (the Coriolis and "
-        f"centrifugal forces of a motion in the East-Up plane lie in it): the floor is the rate a field leaning "
-        f"{EQUATOR_LEAN:g} rad from the platform's vertical would cause, Omega x {EQUATOR_LEAN:g} (round-off keeps "
-        f"the North components exactly 0: measured 0); azimuth fitted over {EQUATOR_PERIODS} periods",
+        f"centrifugal forces of a motion in the East-Up plane lie in it): the floor is the rate the compiled axis's "
+        f"sin(lambda) (read back, ~eps at most) gives, Omega x max(|sin lambda|, eps) (set per run; 1e-17 at the "
+        f"default rate); round-off keeps the North components exactly 0 (measured 0); azimuth fitted over "
+        f"{EQUATOR_PERIODS} periods",
         "N2 at lambda = 0: Omega sin(lambda) = 0, no precession",
     ),
     Check(
@@ -244,7 +244,7 @@ class Foucault(Scenario):
             terms = rot.precession_neglected_terms(pl.rate_vec, down, omega0, amplitude, pl.latitude)
             tolerance["precession-rate"] = rot.precession_tolerance(terms) + drift + rk4
         else:
-            tolerance["equator-precession"] = abs(pl.rate) * EQUATOR_LEAN
+            tolerance["equator-precession"] = abs(pl.rate) * max(abs(float(pl.axis[2])), float(np.finfo(float).eps))
             tolerance["swing-period"] = 10 * (omega0 * dt) ** 4 / 120  # RK4 frequency error x 10
         return {
             "_length": length,
