@@ -56,14 +56,18 @@ ORBIT_ERROR = 1e-7
 # measured over the ranges) times 50.
 ENERGY_PARTITION = 1e-8
 
-# The shape checks (e, a, b): set by E and L, which RK4 keeps far better than the phase, but read from apsides of
-# each body's orbit, whose positions round off: measured <= 1.0e-9 (e; Hooke near-circular, where e = sqrt(1 -
-# (r_min/r_max)^2) amplifies as 1e-11 / e) and <= 3.7e-10 (a, b) over 120 census draws, and up to 7.8e-9 at the
-# ranges' corners (m1/m2 = 100, cm_speed = 3: the heavy body's orbit, a/100, read 3 r0 per period from the origin).
+# The shape checks (e, a, b): set by E and L, which RK4 keeps far better than the phase (~2e-10), read from the
+# cubic-interpolated apsides of each body's orbit: measured <= 1.0e-9 (e; Hooke near-circular, where e = sqrt(1 -
+# (r_min/r_max)^2) amplifies as 1e-11 / e, e >= 0.01) and <= 3.7e-10 (a, b) over 120 census draws. SHAPE_ERROR is
+# ten times that; each run adds the positions' round-off floor of its own orbit (`_roundoff_floors`): up to 7.8e-9
+# measured at the ranges' corners (m1/m2 = 100, cm_speed = 3: the heavy body's orbit, a/100, read far from the
+# origin), where that floor is 1.3e-8.
+SHAPE_ERROR = 1e-8
 _SHAPE = (
     "shape from E and L (RK4 keeps them to ~2e-10), read from cubic-interpolated apsides: measured <= 1e-9 over 120 "
-    "census draws, up to 7.8e-9 at the ranges' corners (a heavy body's orbit, a/100, carried far from the origin: "
-    "position round-off); the orbit error bounds it with 13x margin"
+    f"census draws (e of a near-circular Hooke orbit: ~1e-11 / e); {SHAPE_ERROR:g} leaves 10x; + the run's "
+    "position round-off floor n eps (reach + 2 a_i) / a_i (x 2 for e; x 1/e for a Hooke orbit's e), set per run: a "
+    "heavy body's small orbit carried far by a fast CM (7.8e-9 measured at the corners, floor 1.3e-8)"
 )
 _RK4 = (
     "RK4 at h = 0.01 r_p / v_p (kepler) or 0.005 / w (hooke): orbit error measured <= 1.0e-8 a over the ranges (at "
@@ -92,11 +96,10 @@ CHECKS = (
         Check(
             f"eccentricity-{i}",
             "1",
-            2 * ORBIT_ERROR,
+            SHAPE_ERROR,
             "abs",
             _SHAPE + f"; from body {i}'s distance to the CM at its apsides (r.v = 0, cubic-interpolated): e = "
-            "(r_max - r_min)/(r_max + r_min) (kepler) or sqrt(1 - (r_min/r_max)^2) (hooke) moves by <= 2 x the orbit "
-            f"error {ORBIT_ERROR:g}",
+            "(r_max - r_min)/(r_max + r_min) (kepler) or sqrt(1 - (r_min/r_max)^2) (hooke)",
             "K2: e = sqrt(1 + 2 E l^2 / (mu k^2)) (Wilcox eq. 8.78); K3: both CM-frame orbits share it",
         )
         for i in (1, 2)
@@ -105,10 +108,10 @@ CHECKS = (
         Check(
             f"semi-major-{i}",
             "m",
-            ORBIT_ERROR,
+            SHAPE_ERROR,
             "rel",
             _SHAPE + f"; (r_max + r_min)/2 (kepler) or r_max (hooke) of body {i} about the CM, cubic-interpolated "
-            f"apsides: within the orbit error {ORBIT_ERROR:g} a_i",
+            "apsides",
             "K2: a = -k / (2E); K3: a_i = (mu / m_i) a (a_i m_i = a mu)",
         )
         for i in (1, 2)
@@ -117,12 +120,11 @@ CHECKS = (
         Check(
             f"semi-minor-{i}",
             "m",
-            ORBIT_ERROR,
+            SHAPE_ERROR,
             "rel",
             _SHAPE
             + f"; the largest extent of body {i}'s orbit across its measured apse line (extrema located from the "
-            f"velocity, cubic-interpolated): within the orbit error {ORBIT_ERROR:g} a_i (a tilt delta/e of the apse "
-            "line moves it by ~e delta)",
+            "velocity, cubic-interpolated; a tilt delta/e of the apse line moves it by ~e delta)",
             "K2: b = a sqrt(1 - e^2); K3: b_i = (mu / m_i) b",
         )
         for i in (1, 2)
@@ -585,8 +587,14 @@ def _roundoff_floors(
         mi * mi * abs(b.scale) * speed * (cm_speed + abs(b.scale) * speed) for mi, b in zip(m, bodies, strict=True)
     )
     floors = {"energy-partition": ENERGY_PARTITION + n * eps * energy / (orbit.mu * abs(orbit.energy))}
+    hooke = forces.inverse_square(model) is None
     for i, b in enumerate(bodies, start=1):
-        floors[f"orbit-{i}"] = ORBIT_ERROR + n * eps * (reach + b.semi_major * 2) / b.semi_major
+        position = n * eps * (reach + b.semi_major * 2) / b.semi_major
+        floors[f"orbit-{i}"] = ORBIT_ERROR + position
+        # The shape read from the apsides: a and b relative, e absolute (x 2 from (r_max - r_min) / (r_max + r_min);
+        # a Hooke orbit's sqrt(1 - (r_min/r_max)^2) amplifies by 1/e).
+        floors[f"semi-major-{i}"] = floors[f"semi-minor-{i}"] = SHAPE_ERROR + position
+        floors[f"eccentricity-{i}"] = SHAPE_ERROR + position * (1 / orbit.eccentricity if hooke else 2.0)
     return floors
 
 
