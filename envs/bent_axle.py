@@ -35,6 +35,7 @@ import numpy as np
 from rigidbench import frames
 from rigidbench.analytic import bent_axle as ba
 from rigidbench.envs.base import ScenarioEnv
+from rigidbench.envs.rotor import require_rigid_body_inertia
 from rigidbench.params import BodyInertia, BodyMass, Bound, Numeric, Param, Range, Value
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.settings import round_step
@@ -475,13 +476,7 @@ class BentAxle(Scenario):
     domains = DOMAINS
 
     def validate(self, params: Mapping[str, Any]) -> None:
-        i1, i2, i3 = params["I1"], params["I2"], params["I3"]
-        a, b, c = sorted((i1, i2, i3))
-        if a + b < c:
-            raise ValueError(
-                f"parameters I1, I2, I3 = {i1:g}, {i2:g}, {i3:g} kg m^2 violate the triangle inequality (each "
-                "principal moment <= the sum of the other two): no rigid body has these moments"
-            )
+        require_rigid_body_inertia(params["I1"], params["I2"], params["I3"])
 
     def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
         """The step samples a turn STEPS_PER_TURN times (the trajectory itself is exact at any step)."""
