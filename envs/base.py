@@ -259,7 +259,7 @@ class ScenarioEnv(gym.Env):
         # observable names, the episode's end) are cached by `_load` or read once, and each hook is called once.
         self._apply_action(self._checked_action(action))
         data = self._data
-        mujoco.mj_step(self.model, data, self.frame_skip)  # positional: a keyword costs pybind11 ~0.2 us
+        self._advance(data)
         k = self._k = self._k + 1
         obs = self._observation()
         time = data.time
@@ -268,6 +268,12 @@ class ScenarioEnv(gym.Env):
             return self._diverged_step(obs, k, time)
         info = self._step_info(obs, k, time)
         return obs, info["reward_deviation"], False, time >= self._end, info
+
+    def _advance(self, data: mujoco.MjData) -> None:
+        """The physics of one env step: `frame_skip` steps of `data` with the inputs the action wrote into it.
+        A batched vector env of one copy on MJX or Warp replaces it on its template (`VectorScenarioEnv`), so the
+        engine steps and the rest of `step` is the same code."""
+        mujoco.mj_step(self.model, data, self.frame_skip)  # positional: a keyword costs pybind11 ~0.2 us
 
     def _diverged_step(self, obs: np.ndarray, k: int, time: float):
         """The step on which the simulation diverged: it ends the episode and pays the worst the rest of the

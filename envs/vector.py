@@ -93,8 +93,11 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         self._k = np.zeros(self.num_envs, dtype=np.int64)
         self._every = np.ones(self.num_envs, dtype=bool)
         self._ready = False
-        # One copy on C MuJoCo: the template env steps itself (`_step_one`); no batch is built.
-        self._single = self.num_envs == 1 and self._engine is None
+        # One copy: the template env's own step (`_step_one`), its physics on the engine's one world (`_advance_one`;
+        # on C MuJoCo the template's own `mj_step`, no batch built).
+        self._single = self.num_envs == 1
+        if self._single and self._engine is not None:
+            self.env._advance = self._advance_one
 
     # ---- the episode's configuration, from the template --------------------------------------------------------
 
@@ -102,12 +105,15 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         """Reset the template for the batch's configuration; its state, theory table and reset info."""
         env = self.env
         obs, info = env.reset(seed=seed, options=self._options)
-        if self._single:
+        if self._single and self._engine is None:
             return obs, info
         if self.worlds is None or self.worlds.model is not env.model:  # a new case or parameters: a new batch
             if self.worlds is not None:
                 self.worlds.close()
             self.worlds = engines.worlds(self._engine, env.model, self.num_envs, nthread=self._nthread)
+        if self._single:
+            self.worlds.load(_ONE, env.data)
+            return obs, info
         self._table = np.array(env._rows, dtype=float)
         self._obs0, self._info0 = obs, info
         self._data0 = copy.copy(env.data)  # the episode's initial state, for every copy's (auto)reset
@@ -175,17 +181,18 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         return obs, reward, terminated, truncated, infos
 
     def _step_one(self, actions):
-        """One copy on C MuJoCo: the template env's own step (`ScenarioEnv.step`: one `mj_step` call for the frame
-        skip and the scalar hooks), its outputs as the batch's. A batch of one paid ~40-50 us of array work per step
-        for what the scalar hooks do in a few (docs/engines.md); the numbers are the same (the batch path's equal
-        the single env's bit for bit, `tests/test_vector.py`)."""
+        """One copy: the template env's own step (`ScenarioEnv.step`: its physics, then the scalar hooks), its
+        outputs as the batch's. A batch of one paid ~40-50 us of array work per step for what the scalar hooks do in
+        a few (docs/engines.md); the numbers are the same (the batch path's equal the single env's bit for bit,
+        `tests/test_vector.py`). The physics is one `mj_step` call for the frame skip on C MuJoCo, the engine's one
+        world on MJX and Warp (`_advance_one`)."""
         actions = np.asarray(actions)
         shape = (1, *self.single_action_space.shape)
         if actions.shape != shape:
             raise ValueError(f"actions shape {actions.shape} != {shape}")
         env = self.env
         if self._autoreset[0]:  # gymnasium's next-step autoreset: the step is not taken, the episode starts again
-            obs, info = env.reset(options=self._options)
+            obs, info = self._start_episode(None)
             self._autoreset[0] = False
             return obs[None], np.zeros(1), np.zeros(1, dtype=bool), np.zeros(1, dtype=bool), _put({}, info, _ONE, 1)
         obs, reward, terminated, truncated, info = env.step(actions[0])
@@ -197,6 +204,15 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
             np.array([truncated]),
             _one(info),
         )
+
+    def _advance_one(self, data) -> None:
+        """The template's physics on the engine's one world (its `ScenarioEnv._advance`): the inputs its action
+        wrote into `data` go to the world, the frame skip's steps run there, and the state comes back into `data`
+        (qpos, qvel, and the step count as the clock, `rigidbench.engines.clock`)."""
+        worlds = self.worlds
+        worlds.ctrl[0], worlds.qfrc_applied[0], worlds.xfrc_applied[0] = data.ctrl, data.qfrc_applied, data.xfrc_applied
+        worlds.step(self.env.frame_skip)
+        data.qpos[:], data.qvel[:], data.time = worlds.qpos[0], worlds.qvel[0], worlds.time[0]
 
     def _checked(self, actions) -> np.ndarray:
         actions = np.asarray(actions, dtype=np.float64)

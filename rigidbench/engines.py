@@ -632,27 +632,50 @@ class MjxWorlds(HostWorlds):
         d0 = jax.tree_util.tree_map(lambda x, like: jp.asarray(x, like.dtype), d0, shapes)
         self._device = next(iter(self._m.qpos0.devices()))  # where the model went (`MjxEngine._model_on_device`)
         batched = jax.tree_util.tree_map(lambda x: jp.broadcast_to(x, (self.nworld, *x.shape)), d0)
-        self._d = jax.device_put(batched, self._device)
         self._jax = jax
+        # The model and the worlds go to the program as flat lists of their arrays: flattening an `mjx.Model` and an
+        # `mjx.Data` (MJX's Python dataclasses) cost 250-450 us a call on this CPU, a third to a half of a one-world
+        # step; a list of arrays is flattened in C++. The program rebuilds them from their tree structures.
+        self._m_leaves, m_def = jax.tree_util.tree_flatten(self._m)
+        self._d_leaves, d_def = jax.tree_util.tree_flatten(jax.device_put(batched, self._device))
+        self._dtypes = [x.dtype for x in jax.tree_util.tree_leaves(d0)]
         # A GPU's step writes the worlds' new state over the old (buffer donation); XLA on the CPU cannot, and warns.
-        self._program = _mjx_worlds_program(self._device.platform != "cpu")
+        donate = self._device.platform != "cpu"
+        self._program = _mjx_worlds_program(donate, m_def, d_def)
+        self._load_program = _mjx_load_program(donate)
+        self._start: tuple[bytes, list] = (b"", [])  # the last state loaded, and its arrays on the device
+        self._row = np.empty(mujoco.mj_stateSize(model, _INTEGRATION))
         self._host_arrays()
 
     def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
+        """Every field of worlds `ids` (warm start, contacts, ...) from `data`, in the dtypes the step gives them.
+
+        One jitted select over the worlds' arrays; the state's own arrays go to the device once and are kept while
+        the same state is loaded again (the envs' autoresets load their episode's initial state every time). The
+        field-by-field update this replaced cost 35 ms a load on this CPU, 82 us a step of a one-world episode."""
         import jax
         from mujoco import mjx
 
         self._load_host(ids, data)
-        # every field of those worlds (warm start, contacts, ...) from `data`, in the dtypes the step gives them
-        start = mjx.put_data(self.model, data)
-        self._d = jax.tree_util.tree_map(lambda x, x0: x.at[ids].set(self._jp.asarray(x0, x.dtype)), self._d, start)
+        mujoco.mj_getState(self.model, data, self._row, _INTEGRATION)
+        key = self._row.tobytes()
+        if key != self._start[0]:
+            leaves = jax.tree_util.tree_leaves(mjx.put_data(self.model, data))
+            leaves = [np.asarray(x).astype(dtype) for x, dtype in zip(leaves, self._dtypes, strict=True)]
+            self._start = (key, jax.device_put(leaves, self._device))
+        mask = np.zeros(self.nworld, dtype=bool)
+        mask[ids] = True
+        self._d_leaves = self._load_program(self._d_leaves, self._start[1], mask)
 
     def step(self, nstep: int) -> None:
-        # The inputs go to the jitted program as numpy arrays of its dtype (its dispatch copies them to the device in
-        # one go) and the state comes back as one array [qpos | qvel]: one transfer each way a step.
-        dtype = self._np_dtype
-        inputs = (self.ctrl.astype(dtype), self.qfrc_applied.astype(dtype), self.xfrc_applied.astype(dtype))
-        self._d, state = self._program(self._m, self._d, *inputs, nstep=nstep)
+        # The inputs go to the jitted program as one numpy array [ctrl | qfrc_applied | xfrc_applied] of its dtype
+        # (its dispatch copies it to the device; three arrays cost ~30 us a step more at N = 1) and the state comes
+        # back as one array [qpos | qvel]: one transfer each way a step.
+        n = self.nworld
+        inputs = np.concatenate(
+            (self.ctrl, self.qfrc_applied, self.xfrc_applied.reshape(n, -1)), axis=1, dtype=self._np_dtype
+        )
+        self._d_leaves, state = self._program(self._m_leaves, self._d_leaves, inputs, nstep=nstep)
         state = np.asarray(state)
         nq = self.model.nq
         self.qpos[:], self.qvel[:] = state[:, :nq], state[:, nq:]
@@ -661,30 +684,53 @@ class MjxWorlds(HostWorlds):
     def raw_step(self, nstep: int) -> None:
         """The engine's bare batched step: zero inputs already on the device, nothing copied back."""
         if getattr(self, "_zeros", None) is None:
+            m = self.model
             self._zeros = self._jax.device_put(
-                [np.zeros(a.shape, self._np_dtype) for a in (self.ctrl, self.qfrc_applied, self.xfrc_applied)],
-                self._device,
+                np.zeros((self.nworld, m.nu + m.nv + 6 * m.nbody), self._np_dtype), self._device
             )
-        self._d, state = self._program(self._m, self._d, *self._zeros, nstep=nstep)
+        self._d_leaves, state = self._program(self._m_leaves, self._d_leaves, self._zeros, nstep=nstep)
         state.block_until_ready()
 
 
 @functools.cache
-def _mjx_worlds_program(donate: bool):
-    """`nstep` MJX steps of every world with the given inputs, jitted once per step count (a static argument; model
-    and data are arguments, as in `_mjx_program`); with `donate` the old worlds' buffers hold the new ones."""
+def _mjx_worlds_program(donate: bool, m_def, d_def):
+    """`nstep` MJX steps of every world with the given inputs, jitted once per model and data structure (`m_def`,
+    `d_def`: their tree structures, hashable) and step count (a static argument); the model and the worlds are
+    arguments, as flat lists of their arrays (`MjxWorlds`), so every model of one structure shares the program; with
+    `donate` the old worlds' buffers hold the new ones."""
     import jax
     from mujoco import mjx
 
-    def run(m, d, ctrl, qfrc, xfrc, nstep):
-        def one(d, ctrl, qfrc, xfrc):
-            d = d.replace(ctrl=ctrl, qfrc_applied=qfrc, xfrc_applied=xfrc)
+    def run(m_leaves, d_leaves, inputs, nstep):
+        m = jax.tree_util.tree_unflatten(m_def, m_leaves)
+
+        def one(d, inputs):  # inputs: [ctrl | qfrc_applied | xfrc_applied] of one world (`MjxWorlds.step`)
+            nu, nv = d.ctrl.shape[0], d.qfrc_applied.shape[0]
+            xfrc = inputs[nu + nv :].reshape(d.xfrc_applied.shape)
+            d = d.replace(ctrl=inputs[:nu], qfrc_applied=inputs[nu : nu + nv], xfrc_applied=xfrc)
             d = jax.lax.fori_loop(0, nstep, lambda _, d: mjx.step(m, d), d)
             return d, jax.numpy.concatenate([d.qpos, d.qvel])
 
-        return jax.vmap(one)(d, ctrl, qfrc, xfrc)
+        d, state = jax.vmap(one)(jax.tree_util.tree_unflatten(d_def, d_leaves), inputs)
+        return jax.tree_util.tree_leaves(d), state
 
     return jax.jit(run, static_argnames="nstep", donate_argnums=(1,) if donate else ())
+
+
+@functools.cache
+def _mjx_load_program(donate: bool):
+    """The worlds' arrays (flat, `MjxWorlds`) with those of the worlds in `mask` replaced by one state's arrays
+    (unbatched, in the same order), jitted once per structure and world count (`jax.jit`'s own cache)."""
+    import jax
+    from jax import numpy as jp
+
+    def load(d_leaves, start_leaves, mask):
+        def pick(x, x0):
+            return jp.where(mask.reshape((-1,) + (1,) * (x.ndim - 1)), x0[None], x)
+
+        return [pick(x, x0) for x, x0 in zip(d_leaves, start_leaves, strict=True)]
+
+    return jax.jit(load, donate_argnums=(0,) if donate else ())
 
 
 class WarpWorlds(HostWorlds):
@@ -700,6 +746,11 @@ class WarpWorlds(HostWorlds):
             self._d = mjw.put_data(model, mujoco.MjData(model), nworld=self.nworld)
         self._host_arrays()
         self._graphs: dict[int, Any] = {}
+        # On the CPU a Warp array's `numpy()` is a view of its memory: a step writes the inputs into these and reads
+        # the state out of them (a float32 cast each), where `assign` and `numpy()` cost ~15-35 us a call in Python
+        # (a third of a one-world step's overhead, docs/engines.md). A GPU's arrays are copied both ways.
+        names = ("ctrl", "qfrc_applied", "xfrc_applied", "qpos", "qvel")
+        self._views = {name: getattr(self._d, name).numpy() for name in names} if self._d.qpos.device.is_cpu else None
 
     def load(self, ids: np.ndarray, data: mujoco.MjData) -> None:
         self._load_host(ids, data)
@@ -726,12 +777,19 @@ class WarpWorlds(HostWorlds):
 
     def step(self, nstep: int) -> None:
         wp = self._wp
+        views = self._views
         with _WARP_LOCK, wp.ScopedDevice(self.engine.device):
-            self._d.ctrl.assign(self.ctrl.astype(np.float32))
-            self._d.qfrc_applied.assign(self.qfrc_applied.astype(np.float32))
-            self._d.xfrc_applied.assign(self.xfrc_applied.astype(np.float32))
-            wp.capture_launch(self._graph(nstep))
-            self.qpos[:], self.qvel[:] = self._d.qpos.numpy(), self._d.qvel.numpy()
+            if views is not None:  # the CPU: straight into and out of the arrays' memory
+                views["ctrl"][...], views["qfrc_applied"][...] = self.ctrl, self.qfrc_applied
+                views["xfrc_applied"][...] = self.xfrc_applied
+                wp.capture_launch(self._graph(nstep))  # a CPU launch returns when it is done
+                self.qpos[:], self.qvel[:] = views["qpos"], views["qvel"]
+            else:
+                self._d.ctrl.assign(self.ctrl.astype(np.float32))
+                self._d.qfrc_applied.assign(self.qfrc_applied.astype(np.float32))
+                self._d.xfrc_applied.assign(self.xfrc_applied.astype(np.float32))
+                wp.capture_launch(self._graph(nstep))
+                self.qpos[:], self.qvel[:] = self._d.qpos.numpy(), self._d.qvel.numpy()
         self._tick(nstep)
 
     def raw_step(self, nstep: int) -> None:

@@ -212,6 +212,63 @@ def test_batched_vector_env_on_a_float32_engine_follows_c_within_its_floor(name,
     batched.close()
 
 
+@pytest.mark.parametrize("name", ["warp", "mjx"])
+def test_one_world_on_a_float32_engine_follows_c_through_its_autoresets(name):
+    """N = 1 on Warp or MJX steps the template env with its physics on the engine's one world
+    (`VectorScenarioEnv._advance_one`): within the float32 floor of a sync env of one on C MuJoCo, through episode
+    ends and their autoresets (each loading the episode's initial state again, `MjxWorlds.load`'s kept copy)."""
+    pytest.importorskip({"warp": "mujoco_warp", "mjx": "mujoco.mjx"}[name])
+    import gymnasium as gym
+
+    vector_id = "rigidbench/SimplePendulum-v0"
+    probe = gym.make(vector_id).unwrapped
+    probe.reset(seed=0)
+    frame_skip = math.ceil(probe.episode_duration / probe.model.opt.timestep / 20)  # an episode in 20 steps
+    sync = gym.make_vec(vector_id, num_envs=1, vectorization_mode="sync", frame_skip=frame_skip)
+    one = gym.make_vec(
+        vector_id, num_envs=1, vectorization_mode="vector_entry_point", engine=name, frame_skip=frame_skip
+    )
+    sync.reset(seed=0)
+    one.reset(seed=0)
+    assert one.unwrapped.worlds is not None and one.unwrapped.worlds.nworld == 1
+    rng = np.random.default_rng(1)
+    ends, k = 0, 0
+    for _ in range(50):
+        actions = rng.uniform(-0.5, 0.5, sync.action_space.shape) * sync.single_action_space.high
+        obs_c, _, term_c, trunc_c, _ = sync.step(actions)
+        obs_e, _, term_e, trunc_e, info = one.step(actions)
+        k = 0 if info["time"][0] == probe._time0 else k + 1  # steps into the episode (0: an autoreset's start)
+        floor, _ = roundoff_floor("float32", max(k, 1) * frame_skip, 1.0)
+        assert np.all(np.abs(obs_e - obs_c) <= floor * np.maximum(np.abs(obs_c), 1.0)), (k, obs_e - obs_c, floor)
+        assert np.array_equal(term_c, term_e) and np.array_equal(trunc_c, trunc_e)
+        ends += int(trunc_c[0] or term_c[0])
+    assert ends >= 2
+    sync.close()
+    one.close()
+
+
+def test_mjx_worlds_load_replaces_only_the_worlds_named():
+    """`MjxWorlds.load` of some worlds leaves the others as they were, and loading a state again after stepping
+    puts it back exactly (its kept device copy)."""
+    pytest.importorskip("mujoco.mjx")
+    model = registry.get("pendulum").spec().compile()
+    data = mujoco.MjData(model)
+    data.qpos[:] = 0.3
+    worlds = engines.worlds(engines.engine_for("mjx"), model, 3)
+    worlds.load(np.arange(3), data)
+    worlds.step(5)
+    moved = worlds.qpos.copy()
+    other = mujoco.MjData(model)
+    other.qpos[:] = -0.1
+    worlds.load(np.array([1]), other)
+    worlds.step(1)
+    after = worlds.qpos.copy()
+    assert after[1, 0] < 0 and np.array_equal(after[0], after[2]) and not np.array_equal(after[0], moved[0])
+    worlds.load(np.arange(3), data)
+    worlds.step(5)
+    np.testing.assert_array_equal(worlds.qpos, np.repeat(moved[:1], 3, axis=0))
+
+
 # A fast looping top from a Warp census (seed 1): spin 4.5e3 rad/s, precession 2e5 times slower, nutation 9.4e-5 rad.
 FAST_LOOPING_TOP = {
     "mass": 0.022965755460917517,
