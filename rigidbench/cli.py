@@ -747,7 +747,9 @@ def _session(
                 print(f"resuming: {done} of {len(jobs)} cases already done", file=sys.stderr)
         elif path:
             journal.start(path, kind, _invocation(args, schema))
-        executor = runner.executor_for(args.cluster, _workers(args.jobs, "--jobs"))
+        executor = runner.executor_for(
+            args.cluster, _workers(args.jobs, "--jobs"), settings=settings, jobs=len(jobs) - len(previous)
+        )
         try:
             with _mujoco_warnings():
                 result = runner.run_jobs(
@@ -869,7 +871,10 @@ def _cmd_power(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     t0 = time.perf_counter()
-    executor = runner.executor_for(args.cluster, _workers(args.jobs, "--jobs"))
+    # on MJX the cases of each delta's round are gathered into batches (`runner.Gathered`)
+    executor = runner.executor_for(
+        args.cluster, _workers(args.jobs, "--jobs"), settings=settings, jobs=runner.GATHER_WIDTH
+    )
 
     def say(delta: float, alive: int) -> None:
         if not args.quiet:

@@ -191,20 +191,31 @@ class WarpEngine(Engine):
     ) -> np.ndarray:
         """One world per initial state; K steps and their recording captured once as a Warp graph and launched
         ``nstep / K`` times (on this CPU a step launched kernel by kernel from Python costs ~11 ms, captured
-        ~0.09 ms: the launches, not the physics, were the time)."""
+        ~0.09 ms: the launches, not the physics, were the time). Inside a gathering (`Gather`) the rollout runs
+        with the others' of the same model structure as one batch of worlds (`_warp_batch`)."""
+        return _rollout_request(self, model, states0, nstep, control)
+
+    def _structure(self, model: mujoco.MjModel):
+        """The model on the device, and what a batch of worlds must share with it (`_warp_signature`)."""
+        with _WARP_LOCK:
+            m = self._model_on_device(model)
+        return m, _warp_signature(model, m)
+
+    def _batch(self, part: list[_Request]) -> None:
         with _WARP_LOCK:  # one rollout at a time: see `_WARP_LOCK`
-            return self._rollout(model, states0, nstep, control)
+            _warp_batch(part)
 
     def _rollout(
-        self, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None
+        self, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None, m
     ) -> np.ndarray:
+        """`nstep` steps of one world per initial state on the device model `m` (one of `model`'s structure, its
+        arrays per world where they differ, `_warp_batch`)."""
         wp, mjw = _warp()
         t, q, v = _layout(model)
         nbatch = len(states0)
         from rigidbench.warp_kernels import advance, record, set_ctrl
 
         with wp.ScopedDevice(self.device):
-            m = self._model_on_device(model)
             data = mujoco.MjData(model)
             mujoco.mj_setState(model, data, states0[0], STATE)
             d = mjw.put_data(model, data, nworld=nbatch)
@@ -244,7 +255,6 @@ class WarpEngine(Engine):
             out = np.repeat(states0[:, None, :], nstep, axis=1)
             out[:, :, q] = np.swapaxes(qs.numpy(), 0, 1)
             out[:, :, v] = np.swapaxes(vs.numpy(), 0, 1)
-        out[:, :, t] = clock(states0[:, 0], model.opt.timestep, nstep)[..., None]
         return out
 
 
@@ -412,34 +422,247 @@ class MjxEngine(Engine):
     def rollout(
         self, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None = None
     ) -> np.ndarray:
+        """One world per initial state. Inside a gathering (`Gather`: a run's concurrent cases) the rollout waits
+        for the others' and runs with every one of the same model structure as one batch."""
+        return _rollout_request(self, model, states0, nstep, control)
+
+    def _batch(self, part: list[_Request]) -> None:
         with _MJX_LOCK:  # one program at a time: see `_MJX_LOCK`
-            return self._rollout(model, states0, nstep, control)
+            _mjx_batch(part)
 
-    def _rollout(
-        self, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None = None
-    ) -> np.ndarray:
+    def _structure(self, model: mujoco.MjModel):
+        """The model on the device as a flat list of arrays, and its tree structure (static fields included: the
+        integrator, the collision functions), which decides what can share a compiled program."""
         jax = self._jax()
-        from jax import numpy as jp
-        from mujoco import mjx
-
-        t, q, v = _layout(model)
-        dtype = jp.float64 if self.precision == "float64" else jp.float32
         m = self._model_on_device(model)
-        data = mujoco.MjData(model)
-        mujoco.mj_setState(model, data, states0[0], STATE)
-        # put_data keeps MuJoCo's int32 contact indices; under jax_enable_x64 a step returns them as int64, which
-        # `scan` refuses as a carry: give every array of the start the dtype a step gives it.
-        d0 = mjx.put_data(model, data)
-        shapes = jax.eval_shape(lambda d: mjx.step(m, d), d0)
-        d0 = jax.tree_util.tree_map(lambda x, like: jp.asarray(x, like.dtype), d0, shapes)
-        ctrl = jp.zeros((len(states0), nstep, model.nu), dtype) if control is None else jp.asarray(control, dtype)
-        start = [jp.asarray(states0[:, column], dtype) for column in (0, q, v)]  # time, qpos, qvel
-        qpos, qvel = _mjx_program()(m, d0, *start, ctrl)
-        out = np.repeat(states0[:, None, :], nstep, axis=1)
-        out[:, :, t] = clock(states0[:, 0], model.opt.timestep, nstep)[..., None]  # not `times`: see `clock`
-        out[:, :, q] = np.asarray(qpos, dtype=np.float64)
-        out[:, :, v] = np.asarray(qvel, dtype=np.float64)
-        return out
+        # MJX keeps the model's integer and bookkeeping arrays as static (numpy) fields of the program; a few of them
+        # are data no step reads but a draw's parameters set (the initial condition in `numeric_data`, the size of a
+        # site drawn on a body, keyframes, sensor cutoffs). They are zeroed in what is stepped, so draws differing
+        # only there share a program; a static field the physics reads keeps them apart.
+        unread = {name: np.zeros_like(getattr(m, name)) for name in _UNSTEPPED if hasattr(m, name)}
+        impl = getattr(m, "_impl", None)
+        if model.nhfield == 0 and hasattr(impl, "geom_rbound_hfield"):
+            # the geoms' bounding radii, static for MJX's height-field collisions only (`collision_driver`)
+            unread["_impl"] = impl.replace(geom_rbound_hfield=np.zeros_like(impl.geom_rbound_hfield))
+        return jax.tree_util.tree_flatten(m.replace(**unread))
+
+
+# Static fields of an `mjx.Model` that no step reads (`MjxEngine._structure`).
+_UNSTEPPED = (
+    "numeric_data",
+    "site_size",
+    "sensor_cutoff",
+    "cam_resolution",
+    "cam_sensorsize",
+    "key_time",
+    "key_qpos",
+    "key_qvel",
+    "key_act",
+    "key_mpos",
+    "key_mquat",
+    "key_ctrl",
+    "tuple_objprm",
+)
+
+
+def _rollout_request(
+    engine: Engine, model: mujoco.MjModel, states0: np.ndarray, nstep: int, control: np.ndarray | None
+) -> np.ndarray:
+    """A Warp or MJX rollout: run now, or, inside a gathering (`Gather`), with the others waiting."""
+    states0 = np.asarray(states0, dtype=np.float64)
+    if control is not None and np.shape(control) != (len(states0), nstep, model.nu):
+        # here, in the case that asked: in a gathered batch it would fail every case of the batch
+        raise ValueError(f"control has shape {np.shape(control)}, expected ({len(states0)}, {nstep}, {model.nu})")
+    request = _Request(engine, model, states0, int(nstep), control)
+    gather = _GATHERING
+    if gather is not None and gather.member():
+        return gather.submit(request)
+    _run_requests([request])
+    if request.error is not None:
+        raise request.error
+    return request.result
+
+
+@dataclass(eq=False)
+class _Request:
+    """One rollout asked of an engine: a model, its initial states, steps and controls; its result when run."""
+
+    engine: Any  # MjxEngine or WarpEngine
+    model: mujoco.MjModel
+    states0: np.ndarray
+    nstep: int
+    control: np.ndarray | None
+    result: np.ndarray | None = None
+    error: BaseException | None = None
+    leaves: Any = None  # the model on the device (MJX: its flat arrays; Warp: the `mjw.Model`)
+    key: Any = None
+
+    def prepare(self) -> None:
+        """The model on the device and the key of what it may share a batch with: the engine, the model's
+        structure (`MjxEngine._structure`, `WarpEngine._structure`), the state's fields outside time, qpos and qvel
+        (one start state for every world), and the number of controls."""
+        self.leaves, structure = self.engine._structure(self.model)
+        t, q, v = _layout(self.model)
+        rest = np.delete(self.states0[0], np.r_[t, q, v]).tobytes()
+        self.key = (self.engine, structure, rest, self.model.nu)
+
+    def finish(self, states: np.ndarray) -> None:
+        """This request's worlds' states after each step (its first `nstep`), float64; its clock `clock`."""
+        t = _layout(self.model)[0]
+        out = np.array(states[:, : self.nstep], dtype=np.float64)  # a copy: the batch's array is let go
+        out[:, :, t] = clock(self.states0[:, 0], self.model.opt.timestep, self.nstep)[..., None]
+        self.result, self.leaves = out, None
+
+
+# A gathered batch's recorded states (float32 qpos and qvel per world and step, on the device and again on the host)
+# are kept under this many bytes: a larger group is split, its requests sorted by run length so that each part pads
+# the fewest steps.
+GATHER_BYTES = 1 << 30
+
+
+def _run_requests(requests: list[_Request]) -> None:
+    """Run requests of one engine: each group of one model structure (`_Request.key`) as one compiled batch,
+    every world stepped to the longest run of its part and each request's own steps kept (`_mjx_batch`)."""
+    groups: dict[Any, list[_Request]] = {}
+    for request in requests:
+        try:
+            request.prepare()
+        except BaseException as exc:  # noqa: BLE001 - handed back to the case that asked (a refusal, say)
+            request.error = exc
+            continue
+        groups.setdefault(request.key, []).append(request)
+    for group in groups.values():
+        group.sort(key=lambda r: r.nstep)
+        part: list[_Request] = []
+        for request in group:
+            width = 4 * (request.model.nq + request.model.nv)
+            worlds = sum(len(r.states0) for r in part) + len(request.states0)
+            if part and worlds * request.nstep * width > GATHER_BYTES:
+                _run_part(part)
+                part = []
+            part.append(request)
+        _run_part(part)
+
+
+def _run_part(part: list[_Request]) -> None:
+    try:
+        part[0].engine._batch(part)
+    except BaseException as exc:  # noqa: BLE001 - every case of the batch gets it
+        for request in part:
+            request.error = exc
+
+
+def _stacked_controls(part: list[_Request], nstep: int, nu: int) -> np.ndarray | None:
+    """Every world's controls for `nstep` steps (zeros past a request's own steps), or None if none has any."""
+    if all(r.control is None for r in part):
+        return None
+    controls = np.zeros((sum(len(r.states0) for r in part), nstep, nu))
+    row = 0
+    for r in part:
+        if r.control is not None:
+            controls[row : row + len(r.states0), : r.nstep] = r.control
+        row += len(r.states0)
+    return controls
+
+
+def _finish_all(part: list[_Request], states: np.ndarray) -> None:
+    """Hand each request its worlds' rows of a batch's `states` (worlds, steps, state)."""
+    row = 0
+    for r in part:
+        r.finish(states[row : row + len(r.states0)])
+        row += len(r.states0)
+
+
+def _mjx_batch(part: list[_Request]) -> None:
+    """Requests of one model structure as one MJX program: `jax.vmap` over every world of every request (each world
+    picking its own model's arrays, so timesteps, masses and sizes may differ) of `jax.lax.scan` over the steps of
+    the longest; each request gets its own first steps back, float64, its clock `clock`."""
+    first = part[0]
+    engine, model = first.engine, first.model
+    jax = engine._jax()
+    from jax import numpy as jp
+    from mujoco import mjx
+
+    dtype = jp.float64 if engine.precision == "float64" else jp.float32
+    nstep = max(r.nstep for r in part)
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, first.states0[0], STATE)
+    # put_data keeps MuJoCo's int32 contact indices; under jax_enable_x64 a step returns them as int64, which
+    # `scan` refuses as a carry: give every array of the start the dtype a step gives it.
+    m0 = jax.tree_util.tree_unflatten(first.key[1], first.leaves)
+    d0 = mjx.put_data(model, data)
+    shapes = jax.eval_shape(lambda d: mjx.step(m0, d), d0)
+    d0 = jax.tree_util.tree_map(lambda x, like: jp.asarray(x, like.dtype), d0, shapes)
+    stacked = [jp.stack(column) for column in zip(*(r.leaves for r in part), strict=True)]
+    which = np.concatenate([np.full(len(r.states0), i) for i, r in enumerate(part)])
+    states0 = np.concatenate([r.states0 for r in part])
+    controls = _stacked_controls(part, nstep, model.nu)
+    controls = np.zeros((len(states0), nstep, model.nu)) if controls is None else controls
+    t, q, v = _layout(model)
+    start = [jp.asarray(states0[:, column], dtype) for column in (0, q, v)]  # time, qpos, qvel
+    program = _mjx_program(first.key[1])
+    qpos, qvel = program(stacked, jp.asarray(which), d0, *start, jp.asarray(controls, dtype))
+    states = np.repeat(states0[:, None, :], nstep, axis=1)
+    states[:, :, q], states[:, :, v] = np.asarray(qpos), np.asarray(qvel)
+    _finish_all(part, states)  # each request's clock from its own timestep, not MJX's float32 `time`: see `clock`
+
+
+def _warp_signature(model: mujoco.MjModel, m) -> tuple:
+    """What worlds of one Warp batch must share: every field of the device model `m` but the arrays Warp keeps per
+    world (a leading ``*`` dimension: masses, inertias, sizes, positions, the timestep, gravity), whose shapes only
+    count. `dof_length` (not per world) is read only by sleeping islands: ignored unless the model enables sleep."""
+    import dataclasses as dc
+
+    wp, _ = _warp()
+    sleeps = bool(model.opt.enableflags & mujoco.mjtEnableBit.mjENBL_SLEEP)
+
+    def sign(value, spec, name):
+        if isinstance(value, wp.array):
+            shape = getattr(spec, "shape", ())
+            if (shape and shape[0] == "*") or (name == "dof_length" and not sleeps):
+                return ("per-world", value.shape, str(value.dtype))
+            return ("shared", value.shape, value.numpy().tobytes())
+        if dc.is_dataclass(value):
+            return tuple(sign(getattr(value, f.name), f.type, f.name) for f in dc.fields(value))
+        if isinstance(value, tuple | list):
+            return tuple(sign(x, None, name) for x in value)
+        if isinstance(value, np.ndarray):
+            return ("numpy", value.shape, value.tobytes())
+        return repr(value)
+
+    return sign(m, None, "")
+
+
+def _warp_batch(part: list[_Request]) -> None:
+    """Requests of one model structure as one Warp batch: the first's device model with every per-world array that
+    differs between the requests' models made one row per world, each world stepped to the longest run."""
+    import dataclasses as dc
+
+    wp, _ = _warp()
+    first = part[0]
+    worlds = [len(r.states0) for r in part]
+
+    def per_world(objs) -> None:
+        for f in dc.fields(objs[0]):
+            values = [getattr(x, f.name) for x in objs]
+            if dc.is_dataclass(values[0]):
+                per_world(values)
+            elif isinstance(values[0], wp.array) and getattr(values[0], "_is_batched", False):
+                rows = [v.numpy() for v in values]
+                if any(not np.array_equal(r, rows[0]) for r in rows[1:]):
+                    stacked = np.concatenate([np.repeat(r[:1], n, axis=0) for r, n in zip(rows, worlds, strict=True)])
+                    array = wp.array(stacked, dtype=values[0].dtype, device=values[0].device)
+                    array._is_batched = True
+                    setattr(objs[0], f.name, array)
+
+    with wp.ScopedDevice(first.engine.device):
+        m = first.leaves
+        if len(part) > 1:
+            per_world([r.leaves for r in part])
+        nstep = max(r.nstep for r in part)
+        states0 = np.concatenate([r.states0 for r in part])
+        states = first.engine._rollout(first.model, states0, nstep, _stacked_controls(part, nstep, first.model.nu), m)
+    _finish_all(part, states)
 
 
 def _feature(exc: NotImplementedError) -> str:
@@ -453,24 +676,116 @@ def _feature(exc: NotImplementedError) -> str:
 
 
 @functools.cache
-def _mjx_program():
-    """The batched MJX rollout, jitted once: `jax.vmap` over the worlds of `jax.lax.scan` over the steps. The model
-    and the start are arguments, not closed over, so JAX reuses the compiled program for every call of the same
-    shapes (each chunk of a Monte Carlo batch, a perturbed copy in `power`) instead of tracing it again."""
+def _mjx_program(m_def):
+    """The batched MJX rollout of models of one structure (`m_def`), jitted once (and again for each new shape):
+    `jax.vmap` over the worlds, each taking its model's arrays from the stacked ones (`which`), of `jax.lax.scan`
+    over the steps. The models and the start are arguments, not closed over, so JAX reuses the compiled program for
+    every call of the same shapes (each chunk of a Monte Carlo batch, a perturbed copy in `power`)."""
     import jax
     from mujoco import mjx
 
-    def run(m, d0, time, qpos, qvel, controls):
-        def one(time, qpos, qvel, controls):
+    def run(stacked, which, d0, time, qpos, qvel, controls):
+        def one(i, time, qpos, qvel, controls):
+            m = jax.tree_util.tree_unflatten(m_def, [leaf[i] for leaf in stacked])
+
             def body(d, c):
                 d = mjx.step(m, d.replace(ctrl=c))
                 return d, (d.qpos, d.qvel)
 
             return jax.lax.scan(body, d0.replace(time=time, qpos=qpos, qvel=qvel), controls)[1]
 
-        return jax.vmap(one)(time, qpos, qvel, controls)
+        return jax.vmap(one)(which, time, qpos, qvel, controls)
 
     return jax.jit(run)
+
+
+# ---- gathering: the rollouts of a run's concurrent cases as one batch -----------------------------------------
+
+
+class Gather:
+    """Gathers the MJX rollouts of cases running at once on threads (`rigidbench.runner.Gathered`): a member's
+    rollout waits until every member is waiting on one, then the waiting rollouts run as one compiled batch per
+    model structure (`_run_requests`). A census's draws of a case differ in their parameters, timestep and run
+    length but share a structure: one program and one batch instead of one compile (8-24 s on this CPU) per draw.
+
+    The members are the calls running or about to run: `calls` of them, at most `width` at once. A call that
+    finishes (or fails) without a rollout hands its place to the next call, or, with none left, lets the others go
+    on without it. After `close` (the run ended or was interrupted) every rollout runs at once.
+    """
+
+    def __init__(self, calls: int, width: int) -> None:
+        self._cv = threading.Condition()
+        self._members = min(calls, width)
+        self._unstarted = calls - self._members
+        self._waiting = 0
+        self._closed = False
+        self._pending: list[_Request] = []
+        self._local = threading.local()
+
+    @contextlib.contextmanager
+    def member_of(self) -> Iterator[None]:
+        self._local.member = True
+        try:
+            yield
+        finally:
+            self._local.member = False
+            with self._cv:
+                if self._unstarted > 0:  # the next call takes this place
+                    self._unstarted -= 1
+                else:
+                    self._members -= 1
+            self._flush_if_all_wait()
+
+    def member(self) -> bool:
+        return getattr(self._local, "member", False)
+
+    def close(self) -> None:
+        """No more calls will start: what waits runs now, and every later rollout at once."""
+        with self._cv:
+            self._closed = True
+        self._flush_if_all_wait()
+
+    def submit(self, request: _Request) -> np.ndarray:
+        with self._cv:
+            self._pending.append(request)
+            self._waiting += 1
+        self._flush_if_all_wait()
+        with self._cv:
+            while request.result is None and request.error is None:
+                self._cv.wait()
+        if request.error is not None:
+            raise request.error
+        return request.result
+
+    def _flush_if_all_wait(self) -> None:
+        """Run what is pending once every member waits (this thread runs it; the others wake with their results)."""
+        with self._cv:
+            if not self._pending or (self._waiting < self._members and not self._closed):
+                return
+            batch, self._pending = self._pending, []
+        try:
+            _run_requests(batch)
+        finally:
+            with self._cv:
+                for request in batch:
+                    if request.result is None and request.error is None:
+                        request.error = RuntimeError("the gathered batch did not run")
+                self._waiting -= len(batch)  # answered: a member asking again is waiting anew
+                self._cv.notify_all()
+
+
+_GATHERING: Gather | None = None
+
+
+@contextlib.contextmanager
+def gathering(gather: Gather) -> Iterator[Gather]:
+    """Route the MJX rollouts of `gather`'s members through it for the block."""
+    global _GATHERING
+    previous, _GATHERING = _GATHERING, gather
+    try:
+        yield gather
+    finally:
+        _GATHERING = previous
 
 
 def batched_engine(name: str, *, device: str | None, precision: str | None) -> Engine:

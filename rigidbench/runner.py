@@ -263,6 +263,33 @@ class Threads:
         pass
 
 
+class Gathered(Threads):
+    """Jobs on up to `width` threads at once whose MJX or Warp rollouts are gathered into one batch per model
+    structure (`rigidbench.engines.Gather`): what a run, a census or a power table does on those engines, where a
+    case's time is its program's compile (MJX: 8-24 s on this CPU) or its kernel launches (Warp), and a batch of
+    worlds costs little more than one. `width` bounds the cases (their models, predictions and trajectories) held at
+    once."""
+
+    def map(self, fn: Callable, calls: Sequence[tuple]) -> Iterator[tuple[int, Any]]:
+        from rigidbench import engines
+
+        gather = engines.Gather(len(calls), self.workers)
+
+        def member(*args):
+            with gather.member_of():
+                return fn(*args)
+
+        with engines.gathering(gather):
+            try:
+                yield from super().map(member, calls)
+            finally:
+                gather.close()  # an interrupt cancels the calls not started: those running must not wait for them
+
+
+# Cases gathered at once on MJX (`Gathered`): a census of one scenario (20 draws) or every case of a run fits.
+GATHER_WIDTH = 64
+
+
 class Processes:
     """Jobs in worker processes here (spawned, never forked from a process that may hold GL or threads; each dies
     with this one, `start_worker`): what a sweep or a frontier uses, so that each point is timed in its own
@@ -432,12 +459,19 @@ def _digest(args: tuple) -> str:
     return hashlib.sha1(text.encode()).hexdigest()[:20]
 
 
-def executor_for(cluster: str | None, workers: int, *, processes: bool = False) -> Threads | Processes | Cluster:
+def executor_for(
+    cluster: str | None, workers: int, *, processes: bool = False, settings: Settings | None = None, jobs: int = 0
+) -> Threads | Processes | Cluster:
     """The executor a command asked for: a Dask cluster (``--cluster``), or `workers` threads (or, with
-    `processes`, worker processes) here."""
+    `processes`, worker processes) here; on MJX or Warp (`settings`) the `jobs` cases gathered into batches
+    (`Gathered`, up to `GATHER_WIDTH` at once)."""
     if cluster:
         return Cluster(cluster)
-    return Processes(workers) if processes else Threads(workers)
+    if processes:
+        return Processes(workers)
+    if settings is not None and settings.engine in ("mjx", "warp") and jobs > 1:
+        return Gathered(min(jobs, GATHER_WIDTH))
+    return Threads(workers)
 
 
 def execute(

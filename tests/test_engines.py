@@ -269,6 +269,72 @@ def test_mjx_worlds_load_replaces_only_the_worlds_named():
     np.testing.assert_array_equal(worlds.qpos, np.repeat(moved[:1], 3, axis=0))
 
 
+@pytest.mark.parametrize("name", ["mjx", "warp"])
+def test_gathered_cases_run_as_one_batch_and_equal_each_run_alone(monkeypatch, name):
+    """On MJX and Warp a run's concurrent cases wait for each other and run as one batch per model structure
+    (`runner.Gathered`, `engines.Gather`): two pendulum cases of different lengths in one batch of two (each world
+    its own model, timestep and run length), every measured number equal to the case run alone, bit for bit."""
+    pytest.importorskip({"warp": "mujoco_warp", "mjx": "mujoco.mjx"}[name])
+    settings = Settings(engine=name)
+    jobs = runner.plan(["pendulum:small-amplitude", "pendulum:one-radian"], {"length": "0.5"}, settings)
+    batches = []
+    run_part = engines._run_part
+    monkeypatch.setattr(engines, "_run_part", lambda part: (batches.append(len(part)), run_part(part))[1])
+    gathered = runner.run_jobs(jobs, settings, executor=runner.Gathered(2))
+    assert batches == [2]
+    alone = runner.run_jobs(jobs, settings, executor=runner.Threads(1))
+    assert batches == [2, 1, 1]
+    rows = gathered.ordered()
+    assert len(rows) == 6 and all(r["status"] == "pass" for r in rows)
+    assert [r["measured"] for r in rows] == [r["measured"] for r in alone.ordered()]
+
+
+def test_a_gathering_goes_on_without_members_that_leave_or_fail(monkeypatch):
+    """A member that fails before its rollout, or has none, does not hold the others; members with two rollouts in
+    turn get both, gathered each time; a rollout asked for wrongly is refused in the case that asked."""
+    pytest.importorskip("mujoco.mjx")
+    engine = engines.engine_for("mjx")
+    model = registry.get("pendulum").spec().compile()
+    data = mujoco.MjData(model)
+    data.qpos[:] = 0.2
+    state = np.empty(mujoco.mj_stateSize(model, engines.STATE))
+    mujoco.mj_getState(model, data, state, engines.STATE)
+
+    def case(kind: str):
+        with engines.use(engine):
+            if kind == "fails":
+                raise RuntimeError("before any rollout")
+            if kind == "none":
+                return "no rollout"
+            if kind == "bad":
+                return engine.rollout(model, state[None], 10, control=np.zeros((1, 3, 1)))  # wrong control shape
+            first = engine.rollout(model, state[None], 10)
+            return first, engine.rollout(model, first[:, -1], 10)
+
+    batches = []
+    run_part = engines._run_part
+    monkeypatch.setattr(engines, "_run_part", lambda part: (batches.append(len(part)), run_part(part))[1])
+    out = {}
+    for index, result in runner.Gathered(5).map(
+        lambda kind: _caught(case, kind), [("fails",), ("none",), ("two",), ("two",), ("bad",)]
+    ):
+        out[index] = result
+    assert isinstance(out[0], RuntimeError) and out[1] == "no rollout"
+    assert isinstance(out[4], ValueError) and "control has shape (1, 3, 1)" in str(out[4])
+    assert batches == [2, 2]  # the first rollouts of both, then the second of both
+    alone = engine.rollout(model, state[None], 10)
+    for first, second in (out[2], out[3]):
+        np.testing.assert_array_equal(first, alone)
+        np.testing.assert_array_equal(second, engine.rollout(model, alone[:, -1], 10))
+
+
+def _caught(fn, *args):
+    try:
+        return fn(*args)
+    except Exception as exc:  # noqa: BLE001 - the test looks at it
+        return exc
+
+
 # A fast looping top from a Warp census (seed 1): spin 4.5e3 rad/s, precession 2e5 times slower, nutation 9.4e-5 rad.
 FAST_LOOPING_TOP = {
     "mass": 0.022965755460917517,
