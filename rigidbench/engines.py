@@ -230,7 +230,9 @@ class WarpEngine(Engine):
             vs = wp.zeros((nstep, nbatch, model.nv), dtype=wp.float32)
             ctrl = None
             if control is not None:
-                ctrl = wp.array(np.ascontiguousarray(np.swapaxes(control, 0, 1)), dtype=wp.float32)
+                # (world, step, control), as `set_ctrl` reads it. It was given (step, world, control), which is the
+                # same memory for one world and the wrong numbers for more (a gathered batch of struck sticks).
+                ctrl = wp.array(np.ascontiguousarray(control), dtype=wp.float32)
             index = wp.zeros(1, dtype=wp.int32)
 
             def one_step() -> None:

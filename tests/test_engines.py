@@ -272,11 +272,14 @@ def test_mjx_worlds_load_replaces_only_the_worlds_named():
 @pytest.mark.parametrize("name", ["mjx", "warp"])
 def test_gathered_cases_run_as_one_batch_and_equal_each_run_alone(monkeypatch, name):
     """On MJX and Warp a run's concurrent cases wait for each other and run as one batch per model structure
-    (`runner.Gathered`, `engines.Gather`): two pendulum cases of different lengths in one batch of two (each world
-    its own model, timestep and run length), every measured number equal to the case run alone, bit for bit."""
+    (`runner.Gathered`, `engines.Gather`): two struck sticks struck at different points in one batch of two (each
+    world its own model arrays, timestep and blow), every measured number equal to the case run alone, bit for bit.
+    (Warp's batch read a world's controls from another's place: the struck sticks caught it.)"""
     pytest.importorskip({"warp": "mujoco_warp", "mjx": "mujoco.mjx"}[name])
     settings = Settings(engine=name)
-    jobs = runner.plan(["pendulum:small-amplitude", "pendulum:one-radian"], {"length": "0.5"}, settings)
+    jobs = runner.plan(["struck-stick:quarter", "struck-stick:end"], {}, settings)
+    prepared = [job.scenario.prepare(job.case, job.overrides, settings) for job in jobs]
+    assert prepared[0].model.opt.timestep != prepared[1].model.opt.timestep
     batches = []
     run_part = engines._run_part
     monkeypatch.setattr(engines, "_run_part", lambda part: (batches.append(len(part)), run_part(part))[1])
@@ -285,15 +288,17 @@ def test_gathered_cases_run_as_one_batch_and_equal_each_run_alone(monkeypatch, n
     alone = runner.run_jobs(jobs, settings, executor=runner.Threads(1))
     assert batches == [2, 1, 1]
     rows = gathered.ordered()
-    assert len(rows) == 6 and all(r["status"] == "pass" for r in rows)
+    assert len(rows) == 16 and all(r["status"] == "pass" for r in rows)
     assert [r["measured"] for r in rows] == [r["measured"] for r in alone.ordered()]
 
 
-def test_a_gathering_goes_on_without_members_that_leave_or_fail(monkeypatch):
+@pytest.mark.parametrize("name", ["mjx", "warp"])
+def test_a_gathering_goes_on_without_members_that_leave_or_fail(monkeypatch, name):
     """A member that fails before its rollout, or has none, does not hold the others; members with two rollouts in
-    turn get both, gathered each time; a rollout asked for wrongly is refused in the case that asked."""
-    pytest.importorskip("mujoco.mjx")
-    engine = engines.engine_for("mjx")
+    turn get both, gathered each time, the first time with a longer rollout (padded: each gets its own steps, equal
+    to its rollout alone); a rollout asked for wrongly is refused in the case that asked."""
+    pytest.importorskip({"warp": "mujoco_warp", "mjx": "mujoco.mjx"}[name])
+    engine = engines.engine_for(name)
     model = registry.get("pendulum").spec().compile()
     data = mujoco.MjData(model)
     data.qpos[:] = 0.2
@@ -308,6 +313,8 @@ def test_a_gathering_goes_on_without_members_that_leave_or_fail(monkeypatch):
                 return "no rollout"
             if kind == "bad":
                 return engine.rollout(model, state[None], 10, control=np.zeros((1, 3, 1)))  # wrong control shape
+            if kind == "long":  # gathered with the 10-step rollouts: they are padded to its 23 steps
+                return engine.rollout(model, state[None], 23)
             first = engine.rollout(model, state[None], 10)
             return first, engine.rollout(model, first[:, -1], 10)
 
@@ -315,13 +322,14 @@ def test_a_gathering_goes_on_without_members_that_leave_or_fail(monkeypatch):
     run_part = engines._run_part
     monkeypatch.setattr(engines, "_run_part", lambda part: (batches.append(len(part)), run_part(part))[1])
     out = {}
-    for index, result in runner.Gathered(5).map(
-        lambda kind: _caught(case, kind), [("fails",), ("none",), ("two",), ("two",), ("bad",)]
+    for index, result in runner.Gathered(6).map(
+        lambda kind: _caught(case, kind), [("fails",), ("none",), ("two",), ("two",), ("bad",), ("long",)]
     ):
         out[index] = result
     assert isinstance(out[0], RuntimeError) and out[1] == "no rollout"
     assert isinstance(out[4], ValueError) and "control has shape (1, 3, 1)" in str(out[4])
-    assert batches == [2, 2]  # the first rollouts of both, then the second of both
+    assert batches == [3, 2]  # the first rollouts of both with the long one, then the second of both
+    np.testing.assert_array_equal(out[5], engine.rollout(model, state[None], 23))
     alone = engine.rollout(model, state[None], 10)
     for first, second in (out[2], out[3]):
         np.testing.assert_array_equal(first, alone)
