@@ -446,7 +446,23 @@ class MjxEngine(Engine):
         if model.nhfield == 0 and hasattr(impl, "geom_rbound_hfield"):
             # the geoms' bounding radii, static for MJX's height-field collisions only (`collision_driver`)
             unread["_impl"] = impl.replace(geom_rbound_hfield=np.zeros_like(impl.geom_rbound_hfield))
-        return jax.tree_util.tree_flatten(m.replace(**unread))
+        leaves, treedef = jax.tree_util.tree_flatten(m.replace(**unread))
+        if _collides(model):
+            # A model with contacts shares a batch only with models of the same arrays: MJX's program with the
+            # model's arrays stacked per world never returned on this CPU for the cross-section's colliding spheres
+            # (no CPU used, the result awaited forever), where the program sharing one model runs in seconds.
+            return leaves, (treedef, b"".join(np.asarray(x).tobytes() for x in leaves))
+        return leaves, treedef
+
+
+def _collides(model: mujoco.MjModel) -> bool:
+    """Whether any two geoms of the model can collide (contacts enabled, some contype/conaffinity pair matching)."""
+    if model.opt.disableflags & (mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_CONSTRAINT):
+        return False
+    if model.npair:
+        return True
+    contype, conaffinity = model.geom_contype, model.geom_conaffinity
+    return bool(((contype[:, None] & conaffinity[None, :]) | (conaffinity[:, None] & contype[None, :])).any())
 
 
 # Static fields of an `mjx.Model` that no step reads (`MjxEngine._structure`).
@@ -591,7 +607,8 @@ def _mjx_batch(part: list[_Request]) -> None:
     mujoco.mj_setState(model, data, first.states0[0], STATE)
     # put_data keeps MuJoCo's int32 contact indices; under jax_enable_x64 a step returns them as int64, which
     # `scan` refuses as a carry: give every array of the start the dtype a step gives it.
-    m0 = jax.tree_util.tree_unflatten(first.key[1], first.leaves)
+    treedef = first.key[1][0] if isinstance(first.key[1], tuple) else first.key[1]  # (treedef, arrays) if it collides
+    m0 = jax.tree_util.tree_unflatten(treedef, first.leaves)
     d0 = mjx.put_data(model, data)
     shapes = jax.eval_shape(lambda d: mjx.step(m0, d), d0)
     d0 = jax.tree_util.tree_map(lambda x, like: jp.asarray(x, like.dtype), d0, shapes)
@@ -602,8 +619,12 @@ def _mjx_batch(part: list[_Request]) -> None:
     controls = np.zeros((len(states0), nstep, model.nu)) if controls is None else controls
     t, q, v = _layout(model)
     start = [jp.asarray(states0[:, column], dtype) for column in (0, q, v)]  # time, qpos, qvel
-    program = _mjx_program(first.key[1])
-    qpos, qvel = program(stacked, jp.asarray(which), d0, *start, jp.asarray(controls, dtype))
+    if len(part) == 1 or all(_same_arrays(r.leaves, first.leaves) for r in part[1:]):
+        # one model for every world: the program with the model shared, not stacked (`_mjx_shared_program`)
+        qpos, qvel = _mjx_shared_program()(m0, d0, *start, jp.asarray(controls, dtype))
+    else:
+        program = _mjx_program(treedef)
+        qpos, qvel = program(stacked, jp.asarray(which), d0, *start, jp.asarray(controls, dtype))
     states = np.repeat(states0[:, None, :], nstep, axis=1)
     states[:, :, q], states[:, :, v] = np.asarray(qpos), np.asarray(qvel)
     _finish_all(part, states)  # each request's clock from its own timestep, not MJX's float32 `time`: see `clock`
@@ -675,6 +696,30 @@ def _feature(exc: NotImplementedError) -> str:
         if key in text:
             return f"{word} is not implemented ({text})"
     return text
+
+
+def _same_arrays(a: list, b: list) -> bool:
+    return all(np.array_equal(np.asarray(x), np.asarray(y)) for x, y in zip(a, b, strict=True))
+
+
+@functools.cache
+def _mjx_shared_program():
+    """The batched MJX rollout of one model: `jax.vmap` over the worlds of `jax.lax.scan` over the steps, the model an
+    argument shared by every world (not closed over, so every call of the same shapes reuses the compiled program)."""
+    import jax
+    from mujoco import mjx
+
+    def run(m, d0, time, qpos, qvel, controls):
+        def one(time, qpos, qvel, controls):
+            def body(d, c):
+                d = mjx.step(m, d.replace(ctrl=c))
+                return d, (d.qpos, d.qvel)
+
+            return jax.lax.scan(body, d0.replace(time=time, qpos=qpos, qvel=qvel), controls)[1]
+
+        return jax.vmap(one)(time, qpos, qvel, controls)
+
+    return jax.jit(run)
 
 
 @functools.cache

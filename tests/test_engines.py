@@ -490,3 +490,14 @@ def test_an_env_stored_in_float32_predicts_from_the_rounded_body_and_keeps_its_m
     assert abs(env.prediction["period"] / exact.prediction["period"] - 1) > 1e-3  # the stored body's period
     env.reset(options=options)
     assert env.model is model
+
+
+def test_mjx_gathers_colliding_models_only_with_the_same_arrays():
+    """A model with contacts shares an MJX batch only with models of the same arrays (the program with per-world
+    model arrays never returned for colliding spheres on this CPU); one without contacts shares it across parameters."""
+    from rigidbench.engines import _collides
+
+    settings = Settings()
+    spheres = registry.get("hard-spheres").prepare("head-on", {}, settings).model
+    stick = registry.get("struck-stick").prepare("quarter", {}, settings).model
+    assert _collides(spheres) and not _collides(stick)
