@@ -539,8 +539,9 @@ GATHER_BYTES = 1 << 30
 
 
 def _run_requests(requests: list[_Request]) -> None:
-    """Run requests of one engine: each group of one model structure (`_Request.key`) as one compiled batch,
-    every world stepped to the longest run of its part and each request's own steps kept (`_mjx_batch`)."""
+    """Run requests: each group of one engine and model structure (`_Request.key`) as one batch (the engine's
+    `_batch`: `_mjx_batch`, `_warp_batch`), split where its recorded states would pass `GATHER_BYTES`; every world
+    stepped to the longest run of its part and each request's own steps kept."""
     groups: dict[Any, list[_Request]] = {}
     for request in requests:
         try:
