@@ -18,7 +18,7 @@ import copy
 import functools
 import math
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -538,16 +538,19 @@ class _Request:
 GATHER_BYTES = 1 << 30
 
 
-def _run_requests(requests: list[_Request]) -> None:
+def _run_requests(requests: list[_Request], done: Callable[[list[_Request]], None] | None = None) -> None:
     """Run requests: each group of one engine and model structure (`_Request.key`) as one batch (the engine's
     `_batch`: `_mjx_batch`, `_warp_batch`), split where its recorded states would pass `GATHER_BYTES`; every world
-    stepped to the longest run of its part and each request's own steps kept."""
+    stepped to the longest run of its part and each request's own steps kept. `done` is told of each part as it
+    finishes (and of the requests that failed to prepare), so their cases go on while the other parts run."""
+    done = done or (lambda part: None)
     groups: dict[Any, list[_Request]] = {}
     for request in requests:
         try:
             request.prepare()
         except BaseException as exc:  # noqa: BLE001 - handed back to the case that asked (a refusal, say)
             request.error = exc
+            done([request])
             continue
         groups.setdefault(request.key, []).append(request)
     for group in groups.values():
@@ -558,9 +561,11 @@ def _run_requests(requests: list[_Request]) -> None:
             worlds = sum(len(r.states0) for r in part) + len(request.states0)
             if part and worlds * request.nstep * width > GATHER_BYTES:
                 _run_part(part)
+                done(part)
                 part = []
             part.append(request)
         _run_part(part)
+        done(part)
 
 
 def _run_part(part: list[_Request]) -> None:
@@ -811,15 +816,22 @@ class Gather:
             if not self._pending or (self._waiting < self._members and not self._closed):
                 return
             batch, self._pending = self._pending, []
-        try:
-            _run_requests(batch)
-        finally:
+        answered: set[int] = set()
+
+        def done(part: list[_Request]) -> None:  # those cases go on (and journal) while the other parts run
             with self._cv:
-                for request in batch:
-                    if request.result is None and request.error is None:
-                        request.error = RuntimeError("the gathered batch did not run")
-                self._waiting -= len(batch)  # answered: a member asking again is waiting anew
+                self._waiting -= len(part)  # answered: a member asking again is waiting anew
+                answered.update(id(r) for r in part)
                 self._cv.notify_all()
+
+        try:
+            _run_requests(batch, done)
+        finally:
+            left = [r for r in batch if id(r) not in answered]
+            for request in left:
+                if request.result is None and request.error is None:
+                    request.error = RuntimeError("the gathered batch did not run")
+            done(left)
 
 
 _GATHERING: Gather | None = None
