@@ -708,22 +708,27 @@ def _same_arrays(a: list, b: list) -> bool:
     return all(np.array_equal(np.asarray(x), np.asarray(y)) for x, y in zip(a, b, strict=True))
 
 
-@functools.cache
-def _mjx_shared_program():
-    """The batched MJX rollout of one model: `jax.vmap` over the worlds of `jax.lax.scan` over the steps, the model an
-    argument shared by every world (not closed over, so every call of the same shapes reuses the compiled program)."""
+def _mjx_scan(m, d0, time, qpos, qvel, controls):
+    """One world's rollout inside a jitted program: `jax.lax.scan` of `mjx.step` over the controls from `d0` at
+    (time, qpos, qvel); the qpos and qvel after each step."""
     import jax
     from mujoco import mjx
 
+    def body(d, c):
+        d = mjx.step(m, d.replace(ctrl=c))
+        return d, (d.qpos, d.qvel)
+
+    return jax.lax.scan(body, d0.replace(time=time, qpos=qpos, qvel=qvel), controls)[1]
+
+
+@functools.cache
+def _mjx_shared_program():
+    """The batched MJX rollout of one model: `jax.vmap` of `_mjx_scan` over the worlds, the model an argument shared
+    by every world (not closed over, so every call of the same shapes reuses the compiled program)."""
+    import jax
+
     def run(m, d0, time, qpos, qvel, controls):
-        def one(time, qpos, qvel, controls):
-            def body(d, c):
-                d = mjx.step(m, d.replace(ctrl=c))
-                return d, (d.qpos, d.qvel)
-
-            return jax.lax.scan(body, d0.replace(time=time, qpos=qpos, qvel=qvel), controls)[1]
-
-        return jax.vmap(one)(time, qpos, qvel, controls)
+        return jax.vmap(lambda *world: _mjx_scan(m, d0, *world))(time, qpos, qvel, controls)
 
     return jax.jit(run)
 
@@ -731,21 +736,14 @@ def _mjx_shared_program():
 @functools.cache
 def _mjx_program(m_def):
     """The batched MJX rollout of models of one structure (`m_def`), jitted once (and again for each new shape):
-    `jax.vmap` over the worlds, each taking its model's arrays from the stacked ones (`which`), of `jax.lax.scan`
-    over the steps. The models and the start are arguments, not closed over, so JAX reuses the compiled program for
-    every call of the same shapes (each chunk of a Monte Carlo batch, a perturbed copy in `power`)."""
+    `jax.vmap` of `_mjx_scan` over the worlds, each taking its model's arrays from the stacked ones (`which`). The
+    models and the start are arguments, not closed over, so JAX reuses the compiled program for every call of the
+    same shapes."""
     import jax
-    from mujoco import mjx
 
     def run(stacked, which, d0, time, qpos, qvel, controls):
-        def one(i, time, qpos, qvel, controls):
-            m = jax.tree_util.tree_unflatten(m_def, [leaf[i] for leaf in stacked])
-
-            def body(d, c):
-                d = mjx.step(m, d.replace(ctrl=c))
-                return d, (d.qpos, d.qvel)
-
-            return jax.lax.scan(body, d0.replace(time=time, qpos=qpos, qvel=qvel), controls)[1]
+        def one(i, *world):
+            return _mjx_scan(jax.tree_util.tree_unflatten(m_def, [leaf[i] for leaf in stacked]), d0, *world)
 
         return jax.vmap(one)(which, time, qpos, qvel, controls)
 
