@@ -209,10 +209,7 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         """The template's physics on the engine's one world (its `ScenarioEnv._advance`): the inputs its action
         wrote into `data` go to the world, the frame skip's steps run there, and the state comes back into `data`
         (qpos, qvel, and the step count as the clock, `rigidbench.engines.clock`)."""
-        worlds = self.worlds
-        worlds.ctrl[0], worlds.qfrc_applied[0], worlds.xfrc_applied[0] = data.ctrl, data.qfrc_applied, data.xfrc_applied
-        worlds.step(self.env.frame_skip)
-        data.qpos[:], data.qvel[:], data.time = worlds.qpos[0], worlds.qvel[0], worlds.time[0]
+        self.worlds.advance(data, self.env.frame_skip)
 
     def _checked(self, actions) -> np.ndarray:
         actions = np.asarray(actions, dtype=np.float64)

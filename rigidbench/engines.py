@@ -913,6 +913,14 @@ class Worlds:
         compared with: `benchmarks/vector_envs.py`); C MuJoCo's is `step` itself."""
         self.step(nstep)
 
+    def advance(self, data: mujoco.MjData, nstep: int) -> None:
+        """A batch of one (`VectorScenarioEnv`'s on MJX and Warp): world 0 steps `nstep` times with the inputs in
+        `data`, and its state comes back into `data` (qpos, qvel, and the clock as its time). The host arrays of
+        inputs and state need not follow: a batch of one is read and written through `data`."""
+        self.ctrl[0], self.qfrc_applied[0], self.xfrc_applied[0] = data.ctrl, data.qfrc_applied, data.xfrc_applied
+        self.step(nstep)
+        data.qpos[:], data.qvel[:], data.time = self.qpos[0], self.qvel[0], self.time[0]
+
     def close(self) -> None:
         """Release what the engine holds (threads, device memory)."""
 
@@ -972,7 +980,9 @@ class HostWorlds(Worlds):
         self.qpos, self.qvel = np.zeros((n, m.nq)), np.zeros((n, m.nv))
         self.time, self.ctrl = np.zeros(n), np.zeros((n, m.nu))
         self.qfrc_applied, self.xfrc_applied = np.zeros((n, m.nv)), np.zeros((n, m.nbody, 6))
-        self._t0, self._k = np.zeros(n), np.zeros(n, dtype=np.int64)
+        # The step count in float64 (exact to 2^53 steps, the same time as an int64 count): the first integer ufunc
+        # after an XLA call cost 20-28 us on this CPU, a float one ~5 us (one-world MJX step, measured).
+        self._t0, self._k = np.zeros(n), np.zeros(n)
 
     def _load_host(self, ids: np.ndarray, data: mujoco.MjData) -> None:
         self.qpos[ids], self.qvel[ids] = data.qpos, data.qvel
@@ -1004,19 +1014,24 @@ class MjxWorlds(HostWorlds):
         shapes = jax.eval_shape(lambda d: mjx.step(self._m, d), d0)  # as `MjxEngine.rollout`: the step's dtypes
         d0 = jax.tree_util.tree_map(lambda x, like: jp.asarray(x, like.dtype), d0, shapes)
         self._device = next(iter(self._m.qpos0.devices()))  # where the model went (`MjxEngine._model_on_device`)
-        batched = jax.tree_util.tree_map(lambda x: jp.broadcast_to(x, (self.nworld, *x.shape)), d0)
         self._jax = jax
-        # The model and the worlds go to the program as flat lists of their arrays: flattening an `mjx.Model` and an
-        # `mjx.Data` (MJX's Python dataclasses) cost 250-450 us a call on this CPU, a third to a half of a one-world
-        # step; a list of arrays is flattened in C++. The program rebuilds them from their tree structures.
-        self._m_leaves, m_def = jax.tree_util.tree_flatten(self._m)
-        self._d_leaves, d_def = jax.tree_util.tree_flatten(jax.device_put(batched, self._device))
-        self._dtypes = [x.dtype for x in jax.tree_util.tree_leaves(d0)]
+        # The model and the worlds go to the program packed: one buffer per dtype (`_pack_plan`), unpacked inside it
+        # by static slices. A jitted call costs ~1.5 us per argument and result array on this CPU: as MJX's
+        # dataclasses (flattened in Python) it was 250-450 us a call, as flat lists of their 208 arrays (HeavyTop)
+        # ~300 us, most of a one-world step; packed, a handful of arrays. The program rebuilds the trees from their
+        # structures.
+        m_leaves, m_def = jax.tree_util.tree_flatten(self._m)
+        d_leaves, d_def = jax.tree_util.tree_flatten(d0)
+        self._m_plan, self._d_plan = _pack_plan(m_leaves), _pack_plan(d_leaves)
+        self._m_bufs = jax.device_put(_pack([np.asarray(x) for x in m_leaves], self._m_plan, np), self._device)
+        row = _pack([np.asarray(x) for x in d_leaves], self._d_plan, np)
+        self._d_bufs = jax.device_put([np.broadcast_to(x, (self.nworld, *x.shape)) for x in row], self._device)
+        self._d_dtypes = [np.dtype(x.dtype) for x in d_leaves]
         # A GPU's step writes the worlds' new state over the old (buffer donation); XLA on the CPU cannot, and warns.
         donate = self._device.platform != "cpu"
-        self._program = _mjx_worlds_program(donate, m_def, d_def)
+        self._program = _mjx_worlds_program(donate, m_def, d_def, self._m_plan, self._d_plan)
         self._load_program = _mjx_load_program(donate)
-        self._start: tuple[bytes, list] = (b"", [])  # the last state loaded, and its arrays on the device
+        self._start: tuple[bytes, list] = (b"", [])  # the last state loaded, packed, on the device
         self._row = np.empty(mujoco.mj_stateSize(model, _INTEGRATION))
         self._host_arrays()
 
@@ -1034,11 +1049,11 @@ class MjxWorlds(HostWorlds):
         key = self._row.tobytes()
         if key != self._start[0]:
             leaves = jax.tree_util.tree_leaves(mjx.put_data(self.model, data))
-            leaves = [np.asarray(x).astype(dtype) for x, dtype in zip(leaves, self._dtypes, strict=True)]
-            self._start = (key, jax.device_put(leaves, self._device))
+            leaves = [np.asarray(x).astype(dtype) for x, dtype in zip(leaves, self._d_dtypes, strict=True)]
+            self._start = (key, jax.device_put(_pack(leaves, self._d_plan, np), self._device))
         mask = np.zeros(self.nworld, dtype=bool)
         mask[ids] = True
-        self._d_leaves = self._load_program(self._d_leaves, self._start[1], mask)
+        self._d_bufs = self._load_program(self._d_bufs, self._start[1], mask)
 
     def step(self, nstep: int) -> None:
         # The inputs go to the jitted program as one numpy array [ctrl | qfrc_applied | xfrc_applied] of its dtype
@@ -1048,11 +1063,28 @@ class MjxWorlds(HostWorlds):
         inputs = np.concatenate(
             (self.ctrl, self.qfrc_applied, self.xfrc_applied.reshape(n, -1)), axis=1, dtype=self._np_dtype
         )
-        self._d_leaves, state = self._program(self._m_leaves, self._d_leaves, inputs, nstep=nstep)
+        self._d_bufs, state = self._program(self._m_bufs, self._d_bufs, inputs, nstep=nstep)
         state = np.asarray(state)
         nq = self.model.nq
         self.qpos[:], self.qvel[:] = state[:, :nq], state[:, nq:]
         self._tick(nstep)
+
+    def advance(self, data: mujoco.MjData, nstep: int) -> None:
+        """`Worlds.advance` with the fewest host operations: `data`'s inputs straight into the program's input
+        array and the state straight into `data`, the clock kept, the host arrays left as the last `step` or `load`
+        left them. Each numpy operation just after an XLA call costs several times what it costs warm on this CPU
+        (5-45 us, measured); going through the host arrays put a one-world env at 0.74 of the raw step, this at
+        0.83 (HeavyTop, paired per-step medians)."""
+        if self.nworld != 1:
+            raise ValueError(f"advance() steps a batch of one; this one has {self.nworld} worlds")
+        inputs = np.concatenate((data.ctrl, data.qfrc_applied, data.xfrc_applied.ravel()), dtype=self._np_dtype)
+        self._d_bufs, state = self._program(self._m_bufs, self._d_bufs, inputs[None], nstep=nstep)
+        state = np.asarray(state)[0]
+        nq = self.model.nq
+        data.qpos[:], data.qvel[:] = state[:nq], state[nq:]
+        k = self._k.item() + nstep  # `_tick`'s clock, for world 0
+        self._k[0] = k
+        data.time = self._t0.item() + self.model.opt.timestep * k
 
     def raw_step(self, nstep: int) -> None:
         """The engine's bare batched step: zero inputs already on the device, nothing copied back."""
@@ -1061,47 +1093,75 @@ class MjxWorlds(HostWorlds):
             self._zeros = self._jax.device_put(
                 np.zeros((self.nworld, m.nu + m.nv + 6 * m.nbody), self._np_dtype), self._device
             )
-        self._d_leaves, state = self._program(self._m_leaves, self._d_leaves, self._zeros, nstep=nstep)
+        self._d_bufs, state = self._program(self._m_bufs, self._d_bufs, self._zeros, nstep=nstep)
         state.block_until_ready()
 
 
+def _pack_plan(leaves: list) -> tuple:
+    """How `_pack` lays `leaves` out: per dtype (in order of first appearance), the leaves' indices and shapes, in
+    order. Hashable: a jitted program's static description of its packed arguments."""
+    groups: dict[str, list] = {}
+    for i, x in enumerate(leaves):
+        groups.setdefault(np.dtype(x.dtype).str, []).append((i, tuple(x.shape)))
+    return tuple((dtype, tuple(entries)) for dtype, entries in groups.items())
+
+
+def _pack(leaves: list, plan: tuple, xp) -> list:
+    """`leaves` as one 1-D buffer per dtype of `plan` (`_pack_plan`), with `xp` (numpy, or jax.numpy in a
+    program); each leaf raveled, exactly (no conversion: a group holds one dtype)."""
+    return [xp.concatenate([xp.ravel(leaves[i]) for i, _ in entries]) for _, entries in plan]
+
+
+def _unpack(bufs: list, plan: tuple) -> list:
+    """The leaves `_pack` packed into `bufs`, by static slices (1-D buffers: one world, or the model)."""
+    leaves: list = [None] * sum(len(entries) for _, entries in plan)
+    for buf, (_, entries) in zip(bufs, plan, strict=True):
+        offset = 0
+        for i, shape in entries:
+            size = math.prod(shape)
+            leaves[i] = buf[offset : offset + size].reshape(shape)
+            offset += size
+    return leaves
+
+
 @functools.cache
-def _mjx_worlds_program(donate: bool, m_def, d_def):
+def _mjx_worlds_program(donate: bool, m_def, d_def, m_plan: tuple, d_plan: tuple):
     """`nstep` MJX steps of every world with the given inputs, jitted once per model and data structure (`m_def`,
-    `d_def`: their tree structures, hashable) and step count (a static argument); the model and the worlds are
-    arguments, as flat lists of their arrays (`MjxWorlds`), so every model of one structure shares the program; with
-    `donate` the old worlds' buffers hold the new ones."""
+    `d_def`: their tree structures, hashable; `m_plan`, `d_plan`: how their arrays are packed, `_pack_plan`) and
+    step count (a static argument). The model (one buffer per dtype) and the worlds (one (nworld, size) buffer per
+    dtype) are arguments, so every model of one structure shares the program; with `donate` the old worlds'
+    buffers hold the new ones."""
     import jax
     from mujoco import mjx
 
-    def run(m_leaves, d_leaves, inputs, nstep):
-        m = jax.tree_util.tree_unflatten(m_def, m_leaves)
+    def run(m_bufs, d_bufs, inputs, nstep):
+        m = jax.tree_util.tree_unflatten(m_def, _unpack(m_bufs, m_plan))
 
-        def one(d, inputs):  # inputs: [ctrl | qfrc_applied | xfrc_applied] of one world (`MjxWorlds.step`)
+        def one(d_row, inputs):  # one world's buffers; inputs: its [ctrl | qfrc_applied | xfrc_applied] (`step`)
+            d = jax.tree_util.tree_unflatten(d_def, _unpack(d_row, d_plan))
             nu, nv = d.ctrl.shape[0], d.qfrc_applied.shape[0]
             xfrc = inputs[nu + nv :].reshape(d.xfrc_applied.shape)
             d = d.replace(ctrl=inputs[:nu], qfrc_applied=inputs[nu : nu + nv], xfrc_applied=xfrc)
             d = jax.lax.fori_loop(0, nstep, lambda _, d: mjx.step(m, d), d)
-            return d, jax.numpy.concatenate([d.qpos, d.qvel])
+            return _pack(jax.tree_util.tree_leaves(d), d_plan, jax.numpy), jax.numpy.concatenate([d.qpos, d.qvel])
 
-        d, state = jax.vmap(one)(jax.tree_util.tree_unflatten(d_def, d_leaves), inputs)
-        return jax.tree_util.tree_leaves(d), state
+        return jax.vmap(one)(d_bufs, inputs)
 
     return jax.jit(run, static_argnames="nstep", donate_argnums=(1,) if donate else ())
 
 
 @functools.cache
 def _mjx_load_program(donate: bool):
-    """The worlds' arrays (flat, `MjxWorlds`) with those of the worlds in `mask` replaced by one state's arrays
-    (unbatched, in the same order), jitted once per structure and world count (`jax.jit`'s own cache)."""
+    """The worlds' buffers (packed, `MjxWorlds`) with the rows of the worlds in `mask` replaced by one state's
+    buffers (one world's, in the same order), jitted once per structure and world count (`jax.jit`'s own cache)."""
     import jax
     from jax import numpy as jp
 
-    def load(d_leaves, start_leaves, mask):
+    def load(d_bufs, start_bufs, mask):
         def pick(x, x0):
             return jp.where(mask.reshape((-1,) + (1,) * (x.ndim - 1)), x0[None], x)
 
-        return [pick(x, x0) for x, x0 in zip(d_leaves, start_leaves, strict=True)]
+        return [pick(x, x0) for x, x0 in zip(d_bufs, start_bufs, strict=True)]
 
     return jax.jit(load, donate_argnums=(0,) if donate else ())
 
