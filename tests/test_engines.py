@@ -269,6 +269,55 @@ def test_mjx_worlds_load_replaces_only_the_worlds_named():
     np.testing.assert_array_equal(worlds.qpos, np.repeat(moved[:1], 3, axis=0))
 
 
+def test_pack_round_trips_every_dtype_and_shape_exactly():
+    """`MjxWorlds`' packing (one buffer per dtype, `_pack_plan`) gives back each array exactly: dtype, shape and
+    bits, empty and 0-d arrays included, whatever the order the dtypes come in."""
+    rng = np.random.default_rng(0)
+    leaves = [
+        rng.normal(size=(3, 4)).astype(np.float32),
+        np.array([1, -7, 2**31 - 1], dtype=np.int32),
+        np.zeros((0, 3), dtype=np.float32),
+        np.array(True),
+        rng.normal(size=5).astype(np.float32),
+        np.array([[False, True]]),
+        np.array(np.nan, dtype=np.float32),
+    ]
+    plan = engines._pack_plan(leaves)
+    assert [dtype for dtype, _ in plan] == [np.dtype(np.float32).str, np.dtype(np.int32).str, np.dtype(bool).str]
+    bufs = engines._pack(leaves, plan, np)
+    assert len(bufs) == 3 and all(b.ndim == 1 for b in bufs)
+    back = engines._unpack(bufs, plan)
+    for x, y in zip(leaves, back, strict=True):
+        assert x.dtype == y.dtype and x.shape == y.shape
+        np.testing.assert_array_equal(x, y)
+
+
+def test_mjx_one_world_advance_equals_a_step_through_the_host_arrays():
+    """`MjxWorlds.advance` (a batch of one, straight between `MjData` and the program) gives the same bits as
+    writing the inputs into the host arrays and calling `step`; and it refuses a batch of more than one."""
+    pytest.importorskip("mujoco.mjx")
+    model = registry.get("struck-stick").spec().compile()
+    data = mujoco.MjData(model)
+    data.qvel[:] = 0.5
+    data.xfrc_applied[-1] = [0.3, -0.2, 0.1, 0.0, 0.05, 0.0]
+    data.qfrc_applied[:] = 0.01
+    engine = engines.engine_for("mjx")
+    a, b = engines.worlds(engine, model, 1), engines.worlds(engine, model, 1)
+    a.load(np.arange(1), data)
+    b.load(np.arange(1), data)
+    stepped = mujoco.MjData(model)
+    mujoco.mj_copyData(stepped, model, data)
+    for _ in range(3):
+        a.advance(stepped, 4)
+        b.ctrl[0], b.qfrc_applied[0], b.xfrc_applied[0] = data.ctrl, data.qfrc_applied, data.xfrc_applied
+        b.step(4)
+        np.testing.assert_array_equal(stepped.qpos, b.qpos[0])
+        np.testing.assert_array_equal(stepped.qvel, b.qvel[0])
+        assert stepped.time == b.time[0]
+    with pytest.raises(ValueError, match="batch of one"):
+        engines.worlds(engine, model, 2).advance(data, 1)
+
+
 @pytest.mark.parametrize("name", ["mjx", "warp"])
 def test_gathered_cases_run_as_one_batch_and_equal_each_run_alone(monkeypatch, name):
     """On MJX and Warp a run's concurrent cases wait for each other and run as one batch per model structure
