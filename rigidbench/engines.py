@@ -448,9 +448,10 @@ class MjxEngine(Engine):
             unread["_impl"] = impl.replace(geom_rbound_hfield=np.zeros_like(impl.geom_rbound_hfield))
         leaves, treedef = jax.tree_util.tree_flatten(m.replace(**unread))
         if _collides(model):
-            # A model with contacts shares a batch only with models of the same arrays: MJX's program with the
-            # model's arrays stacked per world never returned on this CPU for the cross-section's colliding spheres
-            # (no CPU used, the result awaited forever), where the program sharing one model runs in seconds.
+            # A model with contacts shares a batch only with models of the same arrays. MJX's program with the
+            # model's arrays stacked per world never returned for the cross-section's colliding spheres on this CPU
+            # (every XLA thread idle, the result never set), also in slices of 128 worlds (3 of 3 runs); the program
+            # sharing one model does the same only intermittently, and not in such slices (`MJX_CONTACT_WORLDS`).
             return leaves, (treedef, b"".join(np.asarray(x).tobytes() for x in leaves))
         return leaves, treedef
 
@@ -624,16 +625,33 @@ def _mjx_batch(part: list[_Request]) -> None:
     controls = _stacked_controls(part, nstep, model.nu)
     controls = np.zeros((len(states0), nstep, model.nu)) if controls is None else controls
     t, q, v = _layout(model)
-    start = [jp.asarray(states0[:, column], dtype) for column in (0, q, v)]  # time, qpos, qvel
-    if len(part) == 1 or all(_same_arrays(r.leaves, first.leaves) for r in part[1:]):
-        # one model for every world: the program with the model shared, not stacked (`_mjx_shared_program`)
-        qpos, qvel = _mjx_shared_program()(m0, d0, *start, jp.asarray(controls, dtype))
-    else:
-        program = _mjx_program(treedef)
-        qpos, qvel = program(stacked, jp.asarray(which), d0, *start, jp.asarray(controls, dtype))
+    shared = len(part) == 1 or all(_same_arrays(r.leaves, first.leaves) for r in part[1:])
+    program = _mjx_shared_program() if shared else _mjx_program(treedef)
     states = np.repeat(states0[:, None, :], nstep, axis=1)
-    states[:, :, q], states[:, :, v] = np.asarray(qpos), np.asarray(qvel)
+    # Colliding models run in slices of `MJX_CONTACT_WORLDS` worlds (the last padded with copies of its first world,
+    # so every slice reuses one compiled program): see `MJX_CONTACT_WORLDS`.
+    on_cpu = engine.device.partition(":")[0] == "cpu"
+    width = MJX_CONTACT_WORLDS if on_cpu and _collides(model) else len(states0)
+    for lo in range(0, len(states0), width):
+        rows = np.arange(lo, min(lo + width, len(states0)))
+        pad = np.concatenate([rows, np.full(width - len(rows), lo)]) if len(states0) > width else rows
+        start = [jp.asarray(states0[pad][:, column], dtype) for column in (0, q, v)]  # time, qpos, qvel
+        inputs = (*start, jp.asarray(controls[pad], dtype))
+        if shared:  # one model for every world: the program with the model shared, not stacked
+            qpos, qvel = program(m0, d0, *inputs)
+        else:
+            qpos, qvel = program(stacked, jp.asarray(which[pad]), d0, *inputs)
+        block = states[lo : lo + len(rows)]  # a view
+        block[:, :, q], block[:, :, v] = np.asarray(qpos)[: len(rows)], np.asarray(qvel)[: len(rows)]
     _finish_all(part, states)  # each request's clock from its own timestep, not MJX's float32 `time`: see `clock`
+
+
+# The most worlds of a colliding model one MJX program steps at once (`_mjx_batch`). On this CPU (jaxlib 0.10.2) the
+# program of the cross-section's colliding spheres intermittently never completed for a few hundred worlds and more,
+# with every XLA thread idle and the result never set: 990 worlds x 9 steps hung 3 of 5 runs, 534 worlds 1 of 4 (and
+# 3 of 4 with `--xla_cpu_multi_thread_eigen=false`), 99-123 worlds 0 of 13. Models without contacts have not hung,
+# nor have contacts on a GPU, where a batch is left whole.
+MJX_CONTACT_WORLDS = 128
 
 
 def _warp_signature(model: mujoco.MjModel, m) -> tuple:

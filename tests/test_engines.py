@@ -541,6 +541,27 @@ def test_an_env_stored_in_float32_predicts_from_the_rounded_body_and_keeps_its_m
     assert env.model is model
 
 
+def test_mjx_steps_colliding_worlds_in_slices_that_equal_one_batch(monkeypatch):
+    """On the CPU, MJX steps a colliding model's worlds in slices of `MJX_CONTACT_WORLDS` (an XLA hang above a few
+    hundred worlds, engines.py), the last slice padded: each world's states are those of the whole batch, bit for bit."""
+    pytest.importorskip("mujoco.mjx")
+    model = registry.get("hard-spheres").prepare("equal-mass", {}, Settings()).model
+    assert engines._collides(model)
+    data = mujoco.MjData(model)
+    state = np.empty(mujoco.mj_stateSize(model, engines.STATE))
+    mujoco.mj_getState(model, data, state, engines.STATE)
+    states0 = np.repeat(state[None], 7, axis=0)
+    _, q, v = engines._layout(model)
+    states0[:, v] += np.linspace(0.0, 0.3, 7)[:, None]  # seven different worlds
+    engine = engines.engine_for("mjx")
+    monkeypatch.setattr(engines, "MJX_CONTACT_WORLDS", 1000)
+    whole = engine.rollout(model, states0, 12)
+    monkeypatch.setattr(engines, "MJX_CONTACT_WORLDS", 3)
+    sliced = engine.rollout(model, states0, 12)
+    assert sliced.shape == whole.shape == (7, 12, states0.shape[1])
+    np.testing.assert_array_equal(sliced, whole)
+
+
 def test_mjx_gathers_colliding_models_only_with_the_same_arrays():
     """A model with contacts shares an MJX batch only with models of the same arrays (the program with per-world
     model arrays never returned for colliding spheres on this CPU); one without contacts shares it across parameters."""
