@@ -543,7 +543,7 @@ def test_an_env_stored_in_float32_predicts_from_the_rounded_body_and_keeps_its_m
 
 def test_mjx_steps_colliding_worlds_in_slices_that_equal_one_batch(monkeypatch):
     """On the CPU, MJX steps a colliding model's worlds in slices of `MJX_CONTACT_WORLDS` (an XLA hang above a few
-    hundred worlds, engines.py), the last slice padded: each world's states are those of the whole batch, bit for bit."""
+    hundred worlds, engines.py), the last slice padded: each world's states are the whole batch's, bit for bit."""
     pytest.importorskip("mujoco.mjx")
     model = registry.get("hard-spheres").prepare("equal-mass", {}, Settings()).model
     assert engines._collides(model)
