@@ -1014,9 +1014,9 @@ class HostWorlds(Worlds):
 
 
 class MjxWorlds(HostWorlds):
-    """MJX: the worlds as one vmapped `mjx.Data` on the engine's device, `nstep` steps one jitted `fori_loop`
-    (compiled once per model structure, world count and step count); the inputs go up and qpos, qvel come down each
-    step."""
+    """MJX: the worlds as one vmapped `mjx.Data` on the engine's device, packed in one buffer per dtype with the
+    model likewise (`_pack_plan`); `nstep` steps one jitted `fori_loop` (compiled once per model structure, world
+    count and step count); the inputs go up and qpos, qvel come down each step."""
 
     def __init__(self, engine: MjxEngine, model: mujoco.MjModel, nworld: int) -> None:
         jax = engine._jax()
