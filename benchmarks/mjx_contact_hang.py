@@ -1,0 +1,86 @@
+"""Reproduce the intermittent MJX hang on colliding models (docs/engines.md, "Runs, censuses and power tables").
+
+The census `rigidbench census cross-section:equal-mass --n 2 --seed 1 --engine mjx` gathers two draws' beams (990
+and 614 worlds of two colliding spheres) into one MJX rollout. This script captures that rollout's requests once,
+then replays the first (990 worlds x 9 steps, the program sharing one model) in fresh processes, each with a time
+limit, and counts the runs that never finished: XLA's threads idle and the result never set, on a 2-core CPU with
+jaxlib 0.10.2. `--slices N` replays it as rigidbench now runs it on the CPU, in slices of N worlds.
+
+    python benchmarks/mjx_contact_hang.py --runs 5                 # as one batch: 5 of 9 hung here (two runs)
+    python benchmarks/mjx_contact_hang.py --runs 5 --slices 128    # rigidbench's slices: 0 of 9 hung here
+
+Needs the `mjx` extra. Each run compiles MJX's program (~12 s on 2 cores); a run past `--limit` seconds counts as hung.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import pickle
+import subprocess
+import sys
+import tempfile
+import time
+
+CAPTURE = """
+import os, pickle, sys
+from rigidbench import engines
+engines._collides = lambda model: False  # capture the gathered batch of both draws' models
+def capture(part):
+    if len(part) > 1:
+        rows = [dict(model=r.model, states0=r.states0, nstep=r.nstep, control=r.control) for r in part]
+        pickle.dump(rows, open(sys.argv[1], "wb"))
+        os._exit(0)
+    raise SystemExit("no gathered batch to capture")
+engines._mjx_batch = capture
+from rigidbench.cli import main
+main(["census", "cross-section:equal-mass", "--n", "2", "--seed", "1", "--engine", "mjx", "--quiet"])
+"""
+
+REPLAY = """
+import pickle, sys, time
+from rigidbench import engines
+engines.MJX_CONTACT_WORLDS = int(sys.argv[2])
+row = pickle.load(open(sys.argv[1], "rb"))[0]
+request = engines._Request(engines.engine_for("mjx"), row["model"], row["states0"], row["nstep"], row["control"])
+request.prepare()
+t = time.perf_counter()
+engines._mjx_batch([request])
+print(f"finished: {len(row['states0'])} worlds x {row['nstep']} steps in {time.perf_counter() - t:.1f} s", flush=True)
+"""
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=5, help="fresh processes to replay in (default 5)")
+    parser.add_argument("--slices", type=int, default=0, help="worlds per program call (default 0: one batch)")
+    parser.add_argument("--limit", type=float, default=90.0, help="seconds before a run counts as hung (default 90)")
+    args = parser.parse_args(argv)
+    if args.runs < 1 or args.limit <= 0 or args.slices < 0:
+        parser.error("--runs >= 1, --limit > 0 and --slices >= 0")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "requests.pkl")
+        subprocess.run([sys.executable, "-c", CAPTURE, path], check=True, capture_output=True, timeout=600)
+        worlds = len(pickle.load(open(path, "rb"))[0]["states0"])
+        width = args.slices or worlds
+        hung = 0
+        for i in range(args.runs):
+            t = time.perf_counter()
+            try:
+                out = subprocess.run(
+                    [sys.executable, "-c", REPLAY, path, str(width)],
+                    capture_output=True,
+                    text=True,
+                    timeout=args.limit,
+                )
+                verdict = out.stdout.strip().splitlines()[-1] if out.returncode == 0 else f"failed: {out.stderr[-300:]}"
+            except subprocess.TimeoutExpired:
+                hung += 1
+                verdict = f"hung (no result after {args.limit:.0f} s)"
+            print(f"run {i + 1}/{args.runs} ({time.perf_counter() - t:.0f} s): {verdict}", flush=True)
+    print(f"{hung} of {args.runs} runs hung ({worlds} worlds, slices of {width})")
+    return 1 if hung else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
