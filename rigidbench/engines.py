@@ -648,10 +648,10 @@ def _mjx_batch(part: list[_Request]) -> None:
 
 # The most worlds of a colliding model one MJX program steps at once (`_mjx_batch`). On this CPU (jaxlib 0.10.2) the
 # program of the cross-section's colliding spheres intermittently never completed for a few hundred worlds and more,
-# with every XLA thread idle and the result never set: 990 worlds x 9 steps hung 5 of 9 runs (0 of 9 in these
-# slices; `benchmarks/mjx_contact_hang.py`), 534 worlds 1 of 5 (and
-# 3 of 4 with `--xla_cpu_multi_thread_eigen=false`), 99-123 worlds 0 of 13. Models without contacts have not hung,
-# nor have contacts on a GPU, where a batch is left whole.
+# with every XLA thread idle and the result never set: 990 worlds x 9 steps hung 5 of 9 runs, and 0 of 9 in these
+# slices (`benchmarks/mjx_contact_hang.py`); 534 worlds 1 of 5 (3 of 4 with `--xla_cpu_multi_thread_eigen=false`);
+# 99-123 worlds 0 of 13. Models without contacts have not hung, nor have contacts on a GPU, where a batch is left
+# whole.
 MJX_CONTACT_WORLDS = 128
 
 
