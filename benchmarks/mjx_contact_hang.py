@@ -58,9 +58,15 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.runs < 1 or args.limit <= 0 or args.slices < 0:
         parser.error("--runs >= 1, --limit > 0 and --slices >= 0")
+    try:
+        import mujoco.mjx  # noqa: F401
+    except ImportError:
+        parser.exit(2, "mjx_contact_hang.py: needs MJX: pip install 'rigidbench[mjx]'\n")
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "requests.pkl")
-        subprocess.run([sys.executable, "-c", CAPTURE, path], check=True, capture_output=True, timeout=600)
+        capture = subprocess.run([sys.executable, "-c", CAPTURE, path], capture_output=True, text=True, timeout=600)
+        if capture.returncode != 0:
+            parser.exit(1, f"mjx_contact_hang.py: capturing the census's rollout failed: {capture.stderr[-300:]}\n")
         worlds = len(pickle.load(open(path, "rb"))[0]["states0"])
         width = args.slices or worlds
         hung = 0
