@@ -20,6 +20,7 @@ import numpy as np
 
 from rigidbench import contact
 from rigidbench.analytic import percussion
+from rigidbench.envs.hard_spheres import CONTACT_ROUNDOFF_RULE, ContactFloor
 from rigidbench.envs.planar import BlowEnv, PlanarMotion, body_state, free_body_motion, has_nan
 from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
@@ -271,7 +272,22 @@ class BallStick(Scenario):
         t_contact = np.pi / np.sqrt(-solref[0]) if solref[0] < 0 else 10 * solref[0]
         length = 2 * float(model.geom("stick").size[1])
         omega = theory.stick.angular_velocity
+        # A float32 engine's floors (`Scenario._roundoff_check`): the elastic contact's, as for the hard spheres
+        # (`hard_spheres.CONTACT_ROUNDOFF_RULE`): the penetration (deepest u t_c / pi) is computed from positions up
+        # to a from the origin, and the ball's steady approach advances u dt a step on a grid of spacing eps |x|;
+        # each check read from the impulse carries it relative to its size.
+        a = float(np.abs(ball.com_W[0]).max())
+        steady = (abs(u) * float(model.opt.timestep), abs(float(ball.com_W[0, 0])), abs(theory.impulse / (m * u)))
+        floors = {
+            "ball-velocity": abs(u),
+            "stick-velocity": 1.0,
+            "stick-angular-velocity": abs(omega),
+            "energy": 1.0,
+        }
+        depth = abs(u) * t_contact / np.pi
         return {
+            "_roundoff_eps": {name: ContactFloor(a, depth, steady, scale) for name, scale in floors.items()},
+            "_roundoff_eps_rule": CONTACT_ROUNDOFF_RULE,
             "_tolerance": {
                 "stick-angular-velocity": 5e-5 * abs(omega) + 1e-12 * abs(u) / length,
                 "ball-velocity": 2.5e-5 * abs(u),

@@ -340,12 +340,20 @@ class FreeAsymmetricTop(Scenario):
     def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
         motion = free_body_motion(model, np.array([data.time]), data.qpos[None], data.qvel[None])
         top = tops.asymmetric_top(tuple(motion.inertia_B), motion.omega_B[0])
+        scales = _separatrix_scales(motion.inertia_B, motion.omega_B[0], top)
+        kappa = float(motion.inertia_B[2] / motion.inertia_B[0])
         return {
             "_theory": top,
             # Float32 (`Scenario.roundoff_scale`): near the separatrix a relative error eta of the rates moves
             # omega(t) by ~5.2 eta S over the run and each flip by ~eta S / K of its time (the float64 tolerances'
             # reasons, `tops.separatrix_sensitivity`).
-            "_roundoff_scale": _separatrix_scales(motion.inertia_B, motion.omega_B[0], top),
+            "_roundoff_scale": scales,
+            # and MuJoCo's solve in world axes adds a relative rate error KAPPA_ROUNDOFF eps kappa, kappa = I3 / I1
+            # (`rate_roundoff`), which the random walk of the generic floor does not see: 0.07 on float32 at
+            # kappa = 6e5, where MJX's period was 2.2e-3 off against the generic floor's 1.7e-3.
+            "_roundoff_eps": {name: KAPPA_ROUNDOFF * kappa * scale for name, scale in scales.items()},
+            "_roundoff_eps_rule": f"{KAPPA_ROUNDOFF:g} eps kappa x scale, kappa = I3 / I1 = {kappa:.3g}: the world-axes"
+            " solve's rate error (`rate_roundoff`), times the check's separatrix scale",
             "omega-body": 0.0,
             "period": top.period,
             "flip-time": top.reversal_time,

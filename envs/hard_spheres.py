@@ -86,7 +86,7 @@ def contact_floor(eps: float, a: float, depth: float, steady: tuple[float, float
 
 
 @dataclass(frozen=True)
-class _ContactFloor:
+class ContactFloor:
     """A check's contact floor as a function of eps (`contact_floor` times the check's scale); a class, not a
     closure, so a prediction holding it pickles with its env."""
 
@@ -126,7 +126,7 @@ def _contact_roundoff(
     scales["soft-shift-exponent"] = (tolerance - 1e-3) / ANGLE_ERROR if tolerance > 1e-3 else 0.0
     return {
         "_roundoff_eps": {
-            name: _ContactFloor(a, depth, tuple(steady), scale) for name, scale in scales.items() if scale > 0
+            name: ContactFloor(a, depth, tuple(steady), scale) for name, scale in scales.items() if scale > 0
         },
         "_roundoff_eps_rule": CONTACT_ROUNDOFF_RULE,
     }

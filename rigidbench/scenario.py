@@ -530,6 +530,18 @@ class Scenario:
                 raise type(exc)(f"scenario '{self.slug}': {exc}") from None
         return model
 
+    def _check_advance(self, model: mujoco.MjModel, data: mujoco.MjData, engine) -> None:
+        """Refuse a start at which the engine's precision cannot resolve a moving body's step
+        (`rigidbench.engines.advance_error`): every check would measure the rounding, not the physics."""
+        from rigidbench.engines import ADVANCE_FRACTION, EngineRefused, advance_error
+
+        error, where = advance_error(model, data, engine.precision)
+        if error >= ADVANCE_FRACTION:
+            raise EngineRefused(
+                f"scenario '{self.slug}': engine {engine.name} ({engine.precision}) cannot resolve this motion: "
+                f"{where} (resolvable: below {ADVANCE_FRACTION:g}, i.e. |v| dt >= {0.5 / ADVANCE_FRACTION:g} eps |x|)"
+            )
+
     def settings_record(self, model: mujoco.MjModel, settings: Settings | None) -> dict:
         """The settings a compiled model runs with, read back in full (`read_settings`), and the engine's
         record (name, version, device, precision) that every result row carries."""
@@ -597,6 +609,7 @@ class Scenario:
 
             model, data = stored(model, data, engine.precision)
             actual = self.read_params(model)
+            self._check_advance(model, data, engine)
         prediction = self.predict(model, data)
         duration = float(self.duration(prediction))
         if not (math.isfinite(duration) and duration > 0):

@@ -571,3 +571,91 @@ def test_mjx_gathers_colliding_models_only_with_the_same_arrays():
     spheres = registry.get("hard-spheres").prepare("head-on", {}, settings).model
     stick = registry.get("struck-stick").prepare("quarter", {}, settings).model
     assert _collides(spheres) and not _collides(stick)
+
+
+# An MJX float32 census draw of cross-section (seed 1): the projectile starts 37.9 m from the origin and moves
+# 7.2e-9 m a step, far below float32's spacing there (4.5e-6 m): float32 recorded no collision in the whole beam.
+STALLED_BEAM = {
+    "m1": 56.065017152489624,
+    "m2": 51.01991355065012,
+    "r1": 37.895100922486655,
+    "r2": 0.0001606237397548131,
+    "speed": 0.0672536953183495,
+    "stiffness": 2542114191102.6157,
+    "contact_steps": 18.406757118638385,
+    "margin": 1.2067052278252888,
+}
+
+
+def test_float32_cannot_advance_a_slow_body_far_from_the_origin():
+    """The rounding `engines.advance_error` bounds: x + v dt stored in float32 is x again where v dt is below half
+    float32's spacing at x, so the body stalls (error 1 of its advance); a body advancing many spacings a step is
+    rounded by a small share of its advance; float64 is never refused."""
+    model = mujoco.MjModel.from_xml_string(
+        '<mujoco><worldbody><body><freejoint/><geom size="0.1"/></body></worldbody></mujoco>'
+    )
+    model.opt.timestep = 1.0704713560016899e-07
+    data = mujoco.MjData(model)
+    data.qpos[:3] = [-37.895, 0.0, 0.0]
+    data.qvel[0] = 0.0672536953183495
+    x = np.float32(data.qpos[0])
+    assert np.float32(x + data.qvel[0] * model.opt.timestep) == x  # the stall itself
+    error, where = engines.advance_error(model, data, "float32")
+    assert error == 1.0 and "can stall" in where and "(-37.9, 0, 0)" in where
+    assert engines.advance_error(model, data, "float64") == (0.0, "")
+    data.qvel[0] = 1e3  # 1.07e-4 m a step, 24 spacings: rounded by at most 1 / 48 of it
+    error, _ = engines.advance_error(model, data, "float32")
+    assert 0 < error <= float(np.finfo(np.float32).eps) * 37.895 / 2 / (1e3 * model.opt.timestep) < 0.03
+
+
+def test_a_float32_engine_refuses_a_case_whose_motion_it_cannot_resolve(fake_engine):
+    """The stalled beam is refused before simulating, naming the engine, its precision, the body and the numbers
+    (a census counts it refused, not failed); C MuJoCo (float64) runs the same draw."""
+    scenario = registry.get("cross-section")
+    with pytest.raises(EngineRefused, match=r"engine fake32 \(float32\) cannot resolve this motion: body 'projectile'"):
+        scenario.prepare("light-projectile", STALLED_BEAM, Settings(engine="mjx"))
+    assert scenario.prepare("light-projectile", STALLED_BEAM).nstep > 0
+
+
+def test_float32_ball_stick_carries_the_contact_floor_and_passes(fake_engine):
+    """The ball-stick blow on float32 storage carries the elastic contact's floor (`hard_spheres.contact_floor`:
+    the penetration, the approach's quantised advance), named in each reason, and passes every check."""
+    settings = Settings(engine="mjx")
+    rows = {r["check"]: r for r in runner.run_job(runner.plan(["ball-stick:light-ball"], None, settings)[0], settings)}
+    for name in ("ball-velocity", "stick-velocity", "stick-angular-velocity", "energy"):
+        assert "the scenario's floor" in rows[name]["tolerance_reason"], rows[name]
+    assert all(r["status"] == results.PASS for r in rows.values()), rows
+
+
+# An MJX float32 census draw (seed 1) of a slender rotor: kappa = I3 / I1 = 6.1e5; MJX's period was 2.2e-3 off in the
+# census against the random-walk floor's 1.7e-3.
+SLENDER_ROTOR = {
+    "I1": 0.00012146394516150345,
+    "I2": 73.52143777686942,
+    "I3": 73.52149741360594,
+    "omega": [-98.39462673286073, -99.44274942513152, -99.64420681798026],
+}
+
+
+def test_float32_floor_of_a_slender_rotor_carries_the_world_axes_solve(fake_engine):
+    """MuJoCo solves for the angular acceleration in world axes, where the inertia has condition kappa = I3 / I1:
+    a relative rate error KAPPA_ROUNDOFF eps kappa (`free_asymmetric_top.rate_roundoff`), which on float32 is
+    7 times the random-walk floor of the period and makes omega(t) unresolved; float64's tolerance is unchanged."""
+    from rigidbench.envs import free_asymmetric_top as fat
+
+    scenario = registry.get("free-asymmetric-top")
+    prep = scenario.prepare("major-axis", SLENDER_ROTOR, Settings(engine="mjx"))
+    kappa = prep.model.body_inertia[1, 2] / prep.model.body_inertia[1, 0]
+    eps = float(np.finfo(np.float32).eps)
+    scale = prep.prediction["_roundoff_scale"]["period"]
+    check = scenario._scaled_check("period", prep.prediction)
+    period, unresolved = scenario._roundoff_check(check, prep.prediction, "float32", prep.nstep)
+    assert not unresolved
+    walk, _ = roundoff_floor("float32", prep.nstep, scale)
+    assert period.tolerance - check.tolerance == pytest.approx(fat.KAPPA_ROUNDOFF * eps * kappa * scale)
+    assert period.tolerance > 7 * walk and "kappa = I3 / I1" in period.reason
+    omega = scenario._scaled_check("omega-body", prep.prediction)
+    _, unresolved = scenario._roundoff_check(omega, prep.prediction, "float32", prep.nstep)
+    assert unresolved
+    same, _ = scenario._roundoff_check(check, prep.prediction, "float64", prep.nstep)
+    assert same == check
