@@ -14,6 +14,7 @@ face at several overhangs past the face's end and prints C MuJoCo's contact agai
 
     python benchmarks/mjx_sphere_box.py            # float64 (jax_enable_x64)
     python benchmarks/mjx_sphere_box.py --float32
+    python benchmarks/mjx_sphere_box.py --scale 0.035    # the census draw's 3.5 cm stick: a 0.14 mm edge
 """
 
 from __future__ import annotations
@@ -26,8 +27,8 @@ XML = """
 <mujoco>
   <option gravity="0 0 0"/>
   <worldbody>
-    <body name="stick"><freejoint/><geom type="box" size="{half_width} 0.5 {half_width}" mass="0.25"/></body>
-    <body name="marble"><freejoint/><geom type="sphere" size="0.008" mass="0.005"/></body>
+    <body name="stick"><freejoint/><geom type="box" size="{half_width} {half_length} {half_width}" mass="0.25"/></body>
+    <body name="marble"><freejoint/><geom type="sphere" size="{radius}" mass="0.005"/></body>
   </worldbody>
 </mujoco>
 """
@@ -38,6 +39,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--float32", action="store_true", help="run MJX in float32 (default: float64)")
     parser.add_argument("--half-width", type=float, default=0.002, help="the box's half-thickness (m), default 0.002")
+    parser.add_argument(
+        "--scale", type=float, default=1.0, help="every length times this (the marble shot's stick length L in m)"
+    )
     args = parser.parse_args()
 
     import jax
@@ -46,21 +50,22 @@ def main() -> None:
     import mujoco
     from mujoco import mjx
 
-    model = mujoco.MjModel.from_xml_string(XML.format(half_width=args.half_width))
+    scale = args.scale
+    half_width, radius, depth = args.half_width * scale, 0.008 * scale, DEPTH * scale
+    model = mujoco.MjModel.from_xml_string(XML.format(half_width=half_width, half_length=0.5 * scale, radius=radius))
     data = mujoco.MjData(model)
     forward = jax.jit(mjx.forward)
     mx = mjx.put_model(model)
     precision = "float32" if args.float32 else "float64"
-    print(
-        f"mujoco {mujoco.__version__}, MJX {precision}; box half-sizes ({args.half_width}, 0.5, {args.half_width}) m,"
-    )
-    print(f"sphere radius 0.008 m, {DEPTH:g} m into the box's +x face; its centre `overhang` past the face's end (y)")
+    sizes = f"({half_width:g}, {0.5 * scale:g}, {half_width:g})"
+    print(f"mujoco {mujoco.__version__}, MJX {precision}; box half-sizes {sizes} m, sphere radius {radius:g} m,")
+    print(f"{depth:g} m into the box's +x face; its centre `overhang` past the face's end (y)")
     print(
         f"{'overhang (m)':>12}  {'C depth (m)':>11}  {'C normal':>28}  "
         f"{'MJX depth (m)':>13}  {'MJX normal':>28}  tilt (rad)"
     )
-    for overhang in (-1e-3, 0.0, 1e-6, 1e-5, 1e-4):
-        data.qpos[:] = [0, 0, 0, 1, 0, 0, 0, args.half_width + 0.008 - DEPTH, 0.5 + overhang, 0, 1, 0, 0, 0]
+    for overhang in (-1e-3 * scale, 0.0, 1e-6 * scale, 1e-5 * scale, 1e-4 * scale):
+        data.qpos[:] = [0, 0, 0, 1, 0, 0, 0, half_width + radius - depth, 0.5 * scale + overhang, 0, 1, 0, 0, 0]
         mujoco.mj_forward(model, data)
         contact = data.contact[0]
         mjx_data = forward(mx, mjx.put_data(model, data))
