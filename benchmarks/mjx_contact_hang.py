@@ -8,6 +8,7 @@ jaxlib 0.10.2. `--slices N` replays it as rigidbench now runs it on the CPU, in 
 
     python benchmarks/mjx_contact_hang.py --runs 5                 # as one batch: 5 of 9 hung here (two runs)
     python benchmarks/mjx_contact_hang.py --runs 5 --slices 128    # rigidbench's slices: 0 of 9 hung here
+    python benchmarks/mjx_contact_hang.py --runs 5 --plain --export hang/   # MJX alone: jit(vmap(scan(mjx.step)))
 
 Needs the `mjx` extra. Each run compiles MJX's program (~12 s on 2 cores); a run past `--limit` seconds counts as hung.
 """
@@ -21,6 +22,8 @@ import subprocess
 import sys
 import tempfile
 import time
+
+import numpy as np
 
 CAPTURE = """
 import os, pickle, sys
@@ -50,14 +53,67 @@ print(f"finished: {len(row['states0'])} worlds x {row['nstep']} steps in {time.p
 """
 
 
+# The same rollout with MJX alone (no rigidbench in the process): the model as MuJoCo's binary, the worlds' initial
+# qpos, qvel and time from the captured states (mjSTATE_FULLPHYSICS: time, qpos, qvel, ...), and a plain
+# jit(vmap(scan(mjx.step))) returning every step's [qpos | qvel]. What a JAX issue can attach.
+REPLAY_PLAIN = """
+import sys, time
+import numpy as np, mujoco, jax, jax.numpy as jnp
+from mujoco import mjx
+model = mujoco.MjModel.from_binary_path(sys.argv[1] + "/model.mjb")
+z = np.load(sys.argv[1] + "/worlds.npz")
+nstep = int(z["nstep"])
+mx = mjx.put_model(model)
+d0 = mjx.put_data(model, mujoco.MjData(model))
+def one(qpos, qvel, t):
+    def body(d, _):
+        d = mjx.step(mx, d)
+        return d, jnp.concatenate([d.qpos, d.qvel])
+    return jax.lax.scan(body, d0.replace(qpos=qpos, qvel=qvel, time=t), None, length=nstep)[1]
+run = jax.jit(jax.vmap(one))
+args = [jnp.asarray(z[k], dtype=d0.qpos.dtype) for k in ("qpos", "qvel", "time")]
+t = time.perf_counter()
+out = np.asarray(run(*args))
+print(f"finished: {out.shape[0]} worlds x {nstep} steps (MJX alone) in {time.perf_counter() - t:.1f} s", flush=True)
+"""
+
+
+def export(path: str, folder: str) -> int:
+    """Write the captured rollout's first request as `folder`/model.mjb and `folder`/worlds.npz (qpos, qvel, time,
+    nstep); return its number of worlds."""
+    import mujoco
+
+    row = pickle.load(open(path, "rb"))[0]
+    model, states = row["model"], row["states0"]
+    if row["control"] is not None and model.nu:
+        raise SystemExit("mjx_contact_hang.py: the captured rollout has controls; --plain replays none")
+    os.makedirs(folder, exist_ok=True)
+    mujoco.mj_saveModel(model, os.path.join(folder, "model.mjb"), None)
+    nq, nv = model.nq, model.nv
+    np.savez(
+        os.path.join(folder, "worlds.npz"),
+        time=states[:, 0],
+        qpos=states[:, 1 : 1 + nq],
+        qvel=states[:, 1 + nq : 1 + nq + nv],
+        nstep=row["nstep"],
+    )
+    return len(states)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=5, help="fresh processes to replay in (default 5)")
     parser.add_argument("--slices", type=int, default=0, help="worlds per program call (default 0: one batch)")
     parser.add_argument("--limit", type=float, default=90.0, help="seconds before a run counts as hung (default 90)")
+    parser.add_argument(
+        "--plain", action="store_true", help="replay with MJX alone (jit(vmap(scan(mjx.step)))), no rigidbench"
+    )
+    parser.add_argument("--export", metavar="DIR", help="also keep the rollout as DIR/model.mjb and DIR/worlds.npz")
     args = parser.parse_args(argv)
     if args.runs < 1 or args.limit <= 0 or args.slices < 0:
         parser.error("--runs >= 1, --limit > 0 and --slices >= 0")
+    if args.plain and args.slices:
+        parser.error("--plain replays one batch: no --slices")
     try:
         import mujoco.mjx  # noqa: F401
     except ImportError:
@@ -67,14 +123,16 @@ def main(argv: list[str] | None = None) -> int:
         capture = subprocess.run([sys.executable, "-c", CAPTURE, path], capture_output=True, text=True, timeout=600)
         if capture.returncode != 0:
             parser.exit(1, f"mjx_contact_hang.py: capturing the census's rollout failed: {capture.stderr[-300:]}\n")
-        worlds = len(pickle.load(open(path, "rb"))[0]["states0"])
+        folder = args.export or os.path.join(tmp, "plain")
+        worlds = export(path, folder) if args.plain or args.export else len(pickle.load(open(path, "rb"))[0]["states0"])
         width = args.slices or worlds
+        code, where = (REPLAY_PLAIN, folder) if args.plain else (REPLAY, path)
         hung = 0
         for i in range(args.runs):
             t = time.perf_counter()
             try:
                 out = subprocess.run(
-                    [sys.executable, "-c", REPLAY, path, str(width)],
+                    [sys.executable, "-c", code, where, str(width)],
                     capture_output=True,
                     text=True,
                     timeout=args.limit,
@@ -84,7 +142,8 @@ def main(argv: list[str] | None = None) -> int:
                 hung += 1
                 verdict = f"hung (no result after {args.limit:.0f} s)"
             print(f"run {i + 1}/{args.runs} ({time.perf_counter() - t:.0f} s): {verdict}", flush=True)
-    print(f"{hung} of {args.runs} runs hung ({worlds} worlds, slices of {width})")
+    mode = "MJX alone" if args.plain else f"slices of {width}"
+    print(f"{hung} of {args.runs} runs hung ({worlds} worlds, {mode})")
     return 1 if hung else 0
 
 

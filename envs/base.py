@@ -120,6 +120,9 @@ class ScenarioEnv(gym.Env):
     # itself; a batched vector env on a float32 engine sets its template's to float32 before its first reset, so
     # the theory is the body that engine simulates.
     _precision = "float64"
+    _engine_name = (
+        "mujoco"  # the engine stepping it (a batched vector env's), named where its precision refuses a start
+    )
 
     @property
     def data(self) -> mujoco.MjData:
@@ -406,6 +409,7 @@ class ScenarioEnv(gym.Env):
         self.data = self.scenario.start(self.model, self._actual)
         if self._precision != "float64":
             self.data = engines.stored_state(self.model, self.data, self._precision)
+            self.scenario.check_advance(self.model, self.data, self._engine_name, self._precision)
         self._prediction = self.scenario.predict(self.model, self.data)
         self.episode_duration = float(self.scenario.duration(self._prediction))
         self._settings_record = read_settings(self.model)

@@ -81,6 +81,7 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         self.env = env_cls(**env_kwargs)  # the template: resolves, builds, predicts and scores through its hooks
         # Its model and state as the engine stores them (float32 on Warp and MJX float32), from the first reset on.
         self.env._precision = self._engine.precision if self._engine is not None else "float64"
+        self.env._engine_name = self._engine.name if self._engine is not None else "mujoco"
         self.single_observation_space = self.env.observation_space
         self.single_action_space = self.env.action_space
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)

@@ -530,16 +530,23 @@ class Scenario:
                 raise type(exc)(f"scenario '{self.slug}': {exc}") from None
         return model
 
-    def _check_advance(self, model: mujoco.MjModel, data: mujoco.MjData, engine) -> None:
-        """Refuse a start at which the engine's precision cannot resolve a moving body's step
-        (`rigidbench.engines.advance_error`): every check would measure the rounding, not the physics."""
+    def check_advance(self, model: mujoco.MjModel, data: mujoco.MjData, engine: str, precision: str) -> None:
+        """Refuse a start at which `engine`'s `precision` cannot resolve a moving body's step
+        (`rigidbench.engines.advance_error`): every check, and an env's every reward, would measure the rounding,
+        not the physics. Nothing on float64.
+
+        Raises
+        ------
+        rigidbench.engines.EngineRefused
+            Naming the scenario, the engine and its precision, the body and the numbers.
+        """
         from rigidbench.engines import ADVANCE_FRACTION, EngineRefused, advance_error
 
-        error, where = advance_error(model, data, engine.precision)
+        error, where = advance_error(model, data, precision)
         if error >= ADVANCE_FRACTION:
             raise EngineRefused(
-                f"scenario '{self.slug}': engine {engine.name} ({engine.precision}) cannot resolve this motion: "
-                f"{where} (resolvable: below {ADVANCE_FRACTION:g}, i.e. |v| dt >= {0.5 / ADVANCE_FRACTION:g} eps |x|)"
+                f"scenario '{self.slug}': engine {engine} ({precision}) cannot resolve this motion: {where} "
+                f"(resolvable: below {ADVANCE_FRACTION:g}, i.e. |v| dt >= {0.5 / ADVANCE_FRACTION:g} eps |x|)"
             )
 
     def settings_record(self, model: mujoco.MjModel, settings: Settings | None) -> dict:
@@ -609,7 +616,7 @@ class Scenario:
 
             model, data = stored(model, data, engine.precision)
             actual = self.read_params(model)
-            self._check_advance(model, data, engine)
+            self.check_advance(model, data, engine.name, engine.precision)
         prediction = self.predict(model, data)
         duration = float(self.duration(prediction))
         if not (math.isfinite(duration) and duration > 0):

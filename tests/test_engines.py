@@ -659,3 +659,28 @@ def test_float32_floor_of_a_slender_rotor_carries_the_world_axes_solve(fake_engi
     assert unresolved
     same, _ = scenario._roundoff_check(check, prep.prediction, "float64", prep.nstep)
     assert same == check
+
+
+# The MJX float32 census draw of ball-stick whose ball (1.16 m from the stick's centre line, 1.4e-10 m a step) never
+# moved: float32's spacing there is 1.4e-7 m.
+STALLED_BALL = {
+    "mass": 0.009024128553485023,
+    "length": 96.47017487928969,
+    "ball_mass": 1.301032418032902e-07,
+    "ball_speed": 0.00013754161961767138,
+    "offset": 22.355119268813667,
+}
+
+
+def test_a_float32_vector_env_refuses_a_start_it_cannot_resolve(fake_engine):
+    """A batched env on a float32 engine refuses the same start at reset, naming engine, precision and body: its
+    rewards would score the rounding; on C MuJoCo the same parameters reset and step."""
+    import gymnasium as gym
+
+    kwargs = {"num_envs": 1, "vectorization_mode": "vector_entry_point", "params": STALLED_BALL}
+    env = gym.make_vec("rigidbench/BallStick-v0", engine="mjx", **kwargs)
+    with pytest.raises(EngineRefused, match=r"engine fake32 \(float32\) cannot resolve this motion: body 'ball'"):
+        env.reset(seed=0)
+    env = gym.make_vec("rigidbench/BallStick-v0", **kwargs)
+    env.reset(seed=0)
+    assert np.isfinite(env.step(np.zeros((1, *env.single_action_space.shape)))[1]).all()
