@@ -409,8 +409,8 @@ class ScenarioEnv(gym.Env):
         self.data = self.scenario.start(self.model, self._actual)
         if self._precision != "float64":
             self.data = engines.stored_state(self.model, self.data, self._precision)
-            self.scenario.check_advance(self.model, self.data, self._engine_name, self._precision)
         self._prediction = self.scenario.predict(self.model, self.data)
+        self.scenario.check_precision(self.model, self.data, self._prediction, self._engine_name, self._precision)
         self.episode_duration = float(self.scenario.duration(self._prediction))
         self._settings_record = read_settings(self.model)
         self._observable_names = tuple(self.observables)  # may be a property of the model: read once, not per step

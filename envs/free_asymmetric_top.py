@@ -348,6 +348,9 @@ class FreeAsymmetricTop(Scenario):
             # omega(t) by ~5.2 eta S over the run and each flip by ~eta S / K of its time (the float64 tolerances'
             # reasons, `tops.separatrix_sensitivity`).
             "_roundoff_scale": scales,
+            # The world-frame momentum is read from the orientation the spin advances every step: secular on float32
+            # (as for the symmetric top, `free_symmetric_top._float32_floors`).
+            "_roundoff_secular": ("momentum-drift",),
             # and MuJoCo's solve in world axes adds a relative rate error KAPPA_ROUNDOFF eps kappa, kappa = I3 / I1
             # (`rate_roundoff`), which the random walk of the generic floor does not see: 0.07 on float32 at
             # kappa = 6e5, where MJX's period was 2.2e-3 off against the generic floor's 1.7e-3.

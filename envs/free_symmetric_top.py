@@ -222,6 +222,39 @@ def _axial_round_off(p: Mapping[str, Any]) -> str | None:
     return None
 
 
+AXIAL_ROUNDOFF_RULE = (
+    "the axial round-off (domain 'axial-round-off'): eps_b = eps kappa |omega| / |omega3|, kappa = max(I1/I3, I3/I1), "
+    "the relative error of Omega_b and the spin rate; omega(t)'s by eps_b max(1, (A / |omega|) |Omega_b| T)"
+)
+
+
+def _float32_floors(i1: float, i3: float, omega: Any, top: Any, duration: float) -> dict[str, Any]:
+    """A float32 engine's floors (`Scenario._roundoff_check`) beyond the random walk's.
+
+    - The axial round-off in units of eps (``_roundoff_eps``): float64's domain 'axial-round-off' keeps it below half
+      the 1e-8 tolerances; on float32 it is 5.4e8 times larger and is the floor of omega(t), Omega_b and the spin
+      rate. A Warp census draw (kappa = 13.4, |omega| / |omega3| = 318) had omega(t) 1.8e-3 off against the random
+      walk's 5.3e-4; this floor is 1.6e-2 there.
+    - The world-frame momentum is read from the orientation the spin advances every step (``_roundoff_secular``):
+      Warp's float32 turns the body with a bias, L_W's direction drifting 0.04-0.056 eps a step, linearly from 3e3 to
+      1e5 steps (a census draw spinning at 171 rad/s: 5.3e-4 after 1.1e5 steps, 13.5 eps sqrt(N); C MuJoCo with only
+      its state rounded to float32 drifts 0.64 eps sqrt(N), a random walk).
+    """
+    w = np.asarray(omega, dtype=float)
+    speed, axial = float(np.linalg.norm(w)), abs(float(w[2]))
+    out: dict[str, Any] = {"_roundoff_secular": ("momentum-drift",)}
+    if speed > 0 and axial > 0:
+        rate = max(i1 / i3, i3 / i1) * speed / axial  # eps_b / eps
+        phase = abs(top.body_rate) * duration
+        out["_roundoff_eps"] = {
+            "omega-body": rate * max(1.0, float(np.hypot(w[0], w[1])) / speed * phase),
+            "body-rate": rate,
+            "spin-rate": rate,
+        }
+        out["_roundoff_eps_rule"] = AXIAL_ROUNDOFF_RULE
+    return out
+
+
 def _vec(v: Any) -> str:
     return ",".join(f"{float(x):.10g}" for x in v)
 
@@ -318,8 +351,10 @@ class FreeSymmetricTop(Scenario):
         motion = free_body_motion(model, np.array([data.time]), data.qpos[None], data.qvel[None])
         i1, _, i3 = motion.inertia_B
         top = tops.symmetric_top(i1, i3, motion.omega_B[0])
+        step = reference_step(i1, i3, motion.omega_B[0]).value
         return {
             "_theory": top,
+            **_float32_floors(i1, i3, motion.omega_B[0], top, run_duration(top.body_rate, top.precession_rate, step)),
             "omega-body": 0.0,
             "body-rate": top.body_rate,
             "precession-rate": top.precession_rate,
@@ -329,7 +364,7 @@ class FreeSymmetricTop(Scenario):
             "space-cone": 0.0,
             "energy-drift": 0.0,
             "momentum-drift": 0.0,
-            "_reference_step": reference_step(i1, i3, motion.omega_B[0]).value,
+            "_reference_step": step,
         }
 
     def duration(self, prediction: Mapping[str, Any]) -> float:

@@ -530,23 +530,50 @@ class Scenario:
                 raise type(exc)(f"scenario '{self.slug}': {exc}") from None
         return model
 
-    def check_advance(self, model: mujoco.MjModel, data: mujoco.MjData, engine: str, precision: str) -> None:
-        """Refuse a start at which `engine`'s `precision` cannot resolve a moving body's step
-        (`rigidbench.engines.advance_error`): every check, and an env's every reward, would measure the rounding,
-        not the physics. Nothing on float64.
+    def precision_domain(
+        self, model: mujoco.MjModel, data: mujoco.MjData, prediction: Mapping[str, Any], precision: str
+    ) -> str | None:
+        """Where an engine of `precision` cannot resolve the case at all, a phrase naming the numbers; else None.
+
+        The floors of `_roundoff_check` are linear in eps and hold while the round-off is a small share of what it
+        disturbs; a scenario overrides this where a quantity every check hangs on (a restoring torque against its
+        own round-off, a contact's penetration against the positions' rounding) would be off by
+        `UNRESOLVED_FRACTION` of itself or more. Called on float32 engines only (`check_precision`); by default
+        nothing beyond the moving bodies' advance (`rigidbench.engines.advance_error`).
+        """
+        return None
+
+    def check_precision(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        prediction: Mapping[str, Any],
+        engine: str,
+        precision: str,
+    ) -> None:
+        """Refuse a start that `engine`'s `precision` cannot resolve: a moving body whose step the positions'
+        rounding swamps (`rigidbench.engines.advance_error`), or the scenario's own `precision_domain`. Every check,
+        and an env's every reward, would measure the rounding, not the physics. Nothing on float64.
 
         Raises
         ------
         rigidbench.engines.EngineRefused
-            Naming the scenario, the engine and its precision, the body and the numbers.
+            Naming the scenario, the engine and its precision, and the numbers.
         """
         from rigidbench.engines import ADVANCE_FRACTION, EngineRefused, advance_error
 
+        if precision == "float64":
+            return
         error, where = advance_error(model, data, precision)
         if error >= ADVANCE_FRACTION:
             raise EngineRefused(
                 f"scenario '{self.slug}': engine {engine} ({precision}) cannot resolve this motion: {where} "
                 f"(resolvable: below {ADVANCE_FRACTION:g}, i.e. |v| dt >= {0.5 / ADVANCE_FRACTION:g} eps |x|)"
+            )
+        reason = self.precision_domain(model, data, prediction, precision)
+        if reason is not None:
+            raise EngineRefused(
+                f"scenario '{self.slug}': engine {engine} ({precision}) cannot resolve this case: {reason}"
             )
 
     def settings_record(self, model: mujoco.MjModel, settings: Settings | None) -> dict:
@@ -616,8 +643,9 @@ class Scenario:
 
             model, data = stored(model, data, engine.precision)
             actual = self.read_params(model)
-            self.check_advance(model, data, engine.name, engine.precision)
         prediction = self.predict(model, data)
+        if engine is not None:
+            self.check_precision(model, data, prediction, engine.name, engine.precision)
         duration = float(self.duration(prediction))
         if not (math.isfinite(duration) and duration > 0):
             raise ValueError(

@@ -684,3 +684,75 @@ def test_a_float32_vector_env_refuses_a_start_it_cannot_resolve(fake_engine):
     env = gym.make_vec("rigidbench/BallStick-v0", **kwargs)
     env.reset(seed=0)
     assert np.isfinite(env.step(np.zeros((1, *env.single_action_space.shape)))[1]).all()
+
+
+# Warp float32 census draws (seed 2) that float32 cannot resolve at all: a gyrocompass whose gyroscopic torque's
+# round-off is 1.5 times its restoring torque, and a beam whose head-on contact is 0.54 um deep at 0.29 m from the
+# origin (contact floor 0.65).
+UNRESOLVABLE = {
+    "gyrocompass:high-latitude": (
+        {
+            "Omega": 0.01417015094816085,
+            "latitude": 1.4989787121484428,
+            "spin_rate": 9362.300389550348,
+            "amplitude": 2.3417264965952667,
+            "I_transverse": 0.2915789897599834,
+            "I_axial": 0.5808685297859582,
+            "I_gimbal": 0.004612549942327968,
+        },
+        r"rho = eps chi' / \(Omega cos\(lat\) sin\|a\|\) = 1.5",
+    ),
+    "cross-section:equal-mass": (
+        {
+            "m1": 1.337332519648945,
+            "m2": 0.5428838048456761,
+            "r1": 0.002553272549997689,
+            "r2": 0.29115702022709505,
+            "speed": 23.041013978847104,
+            "stiffness": 1831742433082878.0,
+            "contact_steps": 4.214338161235597,
+            "margin": 0.21711489300851597,
+        },
+        r"the head-on collision's contact floor .* is 0.6\d of its energy",
+    ),
+}
+
+
+@pytest.mark.parametrize("target", sorted(UNRESOLVABLE))
+def test_a_float32_engine_refuses_a_case_its_precision_cannot_resolve(fake_engine, target):
+    """`Scenario.precision_domain`: refused before simulating on float32, naming the engine and the numbers; the same
+    draw prepares on C MuJoCo (float64), where the linear floors' premise holds."""
+    slug, case = target.split(":")
+    params, message = UNRESOLVABLE[target]
+    scenario = registry.get(slug)
+    with pytest.raises(EngineRefused, match=r"engine fake32 \(float32\) cannot resolve this case: " + message):
+        scenario.prepare(case, params, Settings(engine="mjx"))
+    assert scenario.prepare(case, params).nstep > 0
+
+
+def test_float32_floors_of_a_free_symmetric_top_carry_the_axial_round_off_and_the_orientations_drift(fake_engine):
+    """On float32 the float64 domain 'axial-round-off' (eps kappa |omega| / |omega3| of Omega_b, and the phase it
+    drifts) is the floor of omega(t), Omega_b and the spin rate, and the world-frame momentum's floor is secular (the
+    orientation the spin advances every step); float64's tolerances are unchanged."""
+    params = {"I1": 0.04157175775091186, "I3": 0.003102412069901033, "omega": [10.6129306, 2.3742068, -0.0342456]}
+    scenario = registry.get("free-symmetric-top")
+    prep = scenario.prepare("prolate", params, Settings(engine="mjx"))
+    eps = float(np.finfo(np.float32).eps)
+    w = np.asarray(params["omega"])
+    kappa = prep.model.body_inertia[1, 0] / prep.model.body_inertia[1, 2]
+    rate = kappa * np.linalg.norm(w) / abs(w[2])
+
+    def scored(name, precision="float32"):
+        return scenario._roundoff_check(
+            scenario._scaled_check(name, prep.prediction), prep.prediction, precision, 10**5
+        )
+
+    body_rate, _ = scored("body-rate")
+    assert body_rate.tolerance == pytest.approx(scenario.check("body-rate").tolerance + rate * eps, rel=1e-6)
+    omega_body, unresolved = scored("omega-body")
+    assert not unresolved and omega_body.tolerance > 10 * rate * eps and "axial round-off" in omega_body.reason
+    momentum, _ = scored("momentum-drift")
+    assert "secular" in momentum.reason
+    assert momentum.tolerance == pytest.approx(scenario.check("momentum-drift").tolerance + 0.5 * eps * 10**5)
+    for name in ("body-rate", "omega-body", "momentum-drift"):
+        assert scored(name, "float64")[0] == scenario._scaled_check(name, prep.prediction)
