@@ -453,6 +453,10 @@ class CueStrike(Scenario):
                 * (theory.mu * theory.g / friction_damping(model)) ** 2
                 / abs(theory.speed * theory.slip or math.inf),
             },
+            # A float32 engine's floors (`Scenario.roundoff_scale`): the slip v_x - R omega_y is a difference of two
+            # speed-sized numbers, each rounded to ~eps |v0|, however small the slip itself (an MJX float32 census draw
+            # with a slip of 1.1e-10 m/s at 2.8e-3 m/s never saw it cross zero: its initial slip came out NaN).
+            "_roundoff_scale": {"initial-slip": abs(theory.speed), "residual-slip": abs(theory.speed)},
             "_theory": theory,
             "_rest_height": float(data.qpos[2]),
             "_tau": tau,
