@@ -756,3 +756,17 @@ def test_float32_floors_of_a_free_symmetric_top_carry_the_axial_round_off_and_th
     assert momentum.tolerance == pytest.approx(scenario.check("momentum-drift").tolerance + 0.5 * eps * 10**5)
     for name in ("body-rate", "omega-body", "momentum-drift"):
         assert scored(name, "float64")[0] == scenario._scaled_check(name, prep.prediction)
+
+
+def test_a_slip_far_below_the_speeds_it_is_the_difference_of_is_unresolved_on_float32(fake_engine):
+    """A slip v_x - R omega_y is read from two speed-sized numbers, each rounded to ~eps |v0| on float32, so its floor
+    is in units of the speed (`cue_strike`'s ``_roundoff_scale``): the MJX census draw with a slip of 1.1e-10 m/s at
+    2.8e-3 m/s (its initial slip came out NaN) is unresolved, not failed; float64 scores it."""
+    params = {"radius": 0.001086449831215989, "mass": 86.09068594564422, "mu": 0.028615919416594235}
+    params |= {"g": 0.6083312506694244, "speed": 0.0027765391556635495}
+    scenario = registry.get("cue-strike")
+    prep = scenario.prepare("no-skid", params, Settings(engine="mjx"))
+    check = scenario._scaled_check("initial-slip", prep.prediction)
+    assert abs(prep.prediction["initial-slip"]) < 1e-9 < float(np.finfo(np.float32).eps) * params["speed"] * 10
+    assert scenario._roundoff_check(check, prep.prediction, "float32", prep.nstep)[1]
+    assert scenario._roundoff_check(check, prep.prediction, "float64", prep.nstep) == (check, False)
