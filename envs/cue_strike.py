@@ -350,6 +350,34 @@ def skid_speeds(slip_per_speed: tuple[float, float]) -> Bound:
     )
 
 
+def _sliding_floors(theory: percussion.SkidToRoll, dt: float) -> dict[str, Any]:
+    """A float32 engine's floors of the slide (`Scenario._roundoff_check`'s ``_roundoff_eps``, in units of eps): the
+    friction's steady change of v and omega each step is rounded alike every step, a relative bias q of the
+    deceleration (`engines.steady_change_error`: the larger of v's and omega's). t_r and the skid distance carry
+    q relatively; the slip read with the friction clock q |u0| (the clock's correction is (1 + 1/gamma) mu g t,
+    |u0| at t_r); the energy lost q times itself; the final speed q |v0 - v_f|."""
+    from rigidbench.engines import STEADY_CHANGE_RULE, steady_change_error
+
+    decel = theory.mu * theory.g
+    if decel == 0 or theory.slip == 0:
+        return {}
+    spin = (theory.speed - theory.slip) / theory.radius
+    q = max(
+        steady_change_error(theory.speed, decel * dt),
+        steady_change_error(spin, decel * dt / (theory.gamma * theory.radius)),
+    )
+    final = q * abs(theory.speed - theory.final_speed) / abs(theory.final_speed) if theory.final_speed else 0.0
+    floors = {
+        "time-to-roll": q * (1 - ROLLED) * theory.time_to_roll,
+        "skid-distance": q,
+        "initial-slip": q * abs(theory.slip),
+        "energy-lost": q * abs(theory.energy_lost),
+        "final-speed": final,
+    }
+    rule = f"the slide's deceleration bias q = {q:.3g} eps, {STEADY_CHANGE_RULE}"
+    return {"_roundoff_eps": {k: v for k, v in floors.items() if v > 0}, "_roundoff_eps_rule": rule}
+
+
 class CueStrike(Scenario):
     """A billiard ball struck by a horizontal cue at ``height`` above its centre: the slip the blow leaves
     (B1), the skid under Coulomb friction to rolling (B2), and how MuJoCo's contact does it."""
@@ -457,6 +485,11 @@ class CueStrike(Scenario):
             # speed-sized numbers, each rounded to ~eps |v0|, however small the slip itself (an MJX float32 census draw
             # with a slip of 1.1e-10 m/s at 2.8e-3 m/s never saw it cross zero: its initial slip came out NaN).
             "_roundoff_scale": {"initial-slip": abs(theory.speed), "residual-slip": abs(theory.speed)},
+            # and while it slides, friction changes v and omega by a steady mu g dt and mu g dt / (gamma R) a step:
+            # each change is rounded alike every step (`engines.steady_change_error`), a bias q of the deceleration
+            # that each check read from the slide carries (an MJX float32 census draw at mu = 0.0023: time to roll
+            # 0.66 % long, 3.4 times the random walk's floor; q = 3.2 % there).
+            **_sliding_floors(theory, float(model.opt.timestep)),
             "_theory": theory,
             "_rest_height": float(data.qpos[2]),
             "_tau": tau,

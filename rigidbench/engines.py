@@ -364,6 +364,22 @@ def advance_error(model: mujoco.MjModel, data: mujoco.MjData, precision: str) ->
     return worst, where
 
 
+STEADY_CHANGE_RULE = (
+    "a steady change: a number x that a constant increment c changes every step lives on a grid of spacing <= eps |x|, "
+    "and while x stays in one binade each sum is rounded the same way, so the increment it takes is off by up to "
+    "eps |x| / (2 |c|) of itself, the same sign every step"
+)
+
+
+def steady_change_error(value: float, change: float) -> float:
+    """The relative error, in units of eps, of a steady per-step `change` to a number of size `value`
+    (`STEADY_CHANGE_RULE`): ``|value| / (2 |change|)``; infinite for no change. The secular floor of the clock and of
+    a uniform motion's position (`roundoff_floor`) is the same mechanism; `advance_error` refuses where it stalls a
+    body. A velocity under a small steady acceleration a takes a dt this way (a ball sliding at 0.043 m/s against a
+    friction deceleration of 2.0e-3 m/s^2 at dt = 4e-5 s: 21.4 grid steps a step, rounded alike each step)."""
+    return abs(value) / (2 * abs(change)) if change else math.inf
+
+
 def stored(model: mujoco.MjModel, data: mujoco.MjData, precision: str) -> tuple[mujoco.MjModel, mujoco.MjData]:
     """The model and the state as an engine of `precision` stores them (`stored_model`, `stored_state`); the inputs
     themselves on float64.
@@ -698,7 +714,9 @@ def _mjx_batch(part: list[_Request]) -> None:
 # with every XLA thread idle and the result never set: 990 worlds x 9 steps hung 5 of 9 runs, and 0 of 9 in these
 # slices (`benchmarks/mjx_contact_hang.py`); 534 worlds 1 of 5 (3 of 4 with `--xla_cpu_multi_thread_eigen=false`);
 # 99-123 worlds 0 of 13. Models without contacts have not hung, nor have contacts on a GPU, where a batch is left
-# whole.
+# whole. Narrowed (2026-11-26 (e), `--plain`): MJX alone, jit(vmap(scan(mjx.step))) of the same worlds hung 4 of 13
+# runs with the MJX model a jit argument (as here, so that one compiled program serves every model of a structure)
+# and 0 of 13 with it closed over as a constant.
 MJX_CONTACT_WORLDS = 128
 
 
