@@ -469,16 +469,26 @@ class MjxEngine(Engine):
         forces.refuse_on(self.name, model)
         self._model_on_device(model)
 
-    def _model_on_device(self, model: mujoco.MjModel):
-        jax = self._jax()
-        from mujoco import mjx
+    def jax_device(self):
+        """JAX's device for `device` ("cpu", "cuda:1", ...: JAX's platform, then its index).
 
-        platform, _, index = self.device.partition(":")  # "cpu", "cuda:1", ...: JAX's platform, then its device
+        Raises
+        ------
+        ValueError
+            Naming the devices JAX sees, where it has no such device.
+        """
+        jax = self._jax()
+        platform, _, index = self.device.partition(":")
         try:
-            device = jax.devices(platform)[int(index or 0)]
+            return jax.devices(platform)[int(index or 0)]
         except (RuntimeError, IndexError, ValueError):
             available = ", ".join(f"{d.platform}:{d.id}" for d in jax.devices())
             raise ValueError(f"engine mjx has no device {self.device!r} here (JAX sees {available})") from None
+
+    def _model_on_device(self, model: mujoco.MjModel):
+        from mujoco import mjx
+
+        device = self.jax_device()
         try:
             return mjx.put_model(model, device=device)
         except NotImplementedError as exc:
@@ -666,6 +676,14 @@ def _mjx_batch(part: list[_Request]) -> None:
     picking its own model's arrays, so timesteps, masses and sizes may differ) of `jax.lax.scan` over the steps of
     the longest; each request gets its own first steps back, float64, its clock `clock`."""
     first = part[0]
+    with first.engine._jax().default_device(first.engine.jax_device()):
+        _mjx_batch_on_device(part)
+
+
+def _mjx_batch_on_device(part: list[_Request]) -> None:
+    """`_mjx_batch` with JAX's default device the engine's: the start, the inputs and the model on one device (a
+    start left on JAX's default device, a GPU, beside a model on the CPU asked for was an error)."""
+    first = part[0]
     engine, model = first.engine, first.model
     jax = engine._jax()
     from jax import numpy as jp
@@ -679,7 +697,7 @@ def _mjx_batch(part: list[_Request]) -> None:
     # `scan` refuses as a carry: give every array of the start the dtype a step gives it.
     treedef = first.key[1][0] if isinstance(first.key[1], tuple) else first.key[1]  # (treedef, arrays) if it collides
     m0 = jax.tree_util.tree_unflatten(treedef, first.leaves)
-    d0 = mjx.put_data(model, data)
+    d0 = mjx.put_data(model, data, device=engine.jax_device())  # put_data commits to device 0 otherwise
     shapes = jax.eval_shape(lambda d: mjx.step(m0, d), d0)
     d0 = jax.tree_util.tree_map(lambda x, like: jp.asarray(x, like.dtype), d0, shapes)
     stacked = [jp.stack(column) for column in zip(*(r.leaves for r in part), strict=True)]

@@ -181,6 +181,20 @@ def test_mjx_device_it_does_not_have_is_one_line(capsys):
     assert "engine mjx has no device 'cuda:7' here" in err and "Traceback" not in err
 
 
+def test_mjx_runs_on_the_device_asked_for_not_on_jaxs_default():
+    """`--device cpu:1` with two CPU devices: the start and the inputs go where the model goes (they went to JAX's
+    default device, and on an H100 machine `--device cpu` was an error: "incompatible devices")."""
+    pytest.importorskip("mujoco.mjx")
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
+    command = [sys.executable, "-m", "rigidbench", "run", "pendulum:one-radian", "--engine", "mjx", "--device", "cpu:1"]
+    out = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0 and "3 passed" in out.stdout, out.stdout[-1500:] + out.stderr[-1500:]
+
+
 @pytest.mark.parametrize("name", ["warp", "mjx"])
 @pytest.mark.parametrize("vector_id", ["rigidbench/SimplePendulum-v0", "rigidbench/CoupledPendulums-v0"])
 def test_batched_vector_env_on_a_float32_engine_follows_c_within_its_floor(name, vector_id):
