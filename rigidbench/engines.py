@@ -17,6 +17,7 @@ import contextvars
 import copy
 import functools
 import math
+import os
 import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -469,6 +470,10 @@ class MjxEngine(Engine):
         forces.refuse_on(self.name, model)
         self._model_on_device(model)
 
+    def record(self) -> dict[str, Any]:
+        """`Engine.record` and the matrix-multiply precision its programs are traced with (`matmul_precision`)."""
+        return {**super().record(), "matmul_precision": matmul_precision()}
+
     def jax_device(self):
         """JAX's device for `device` ("cpu", "cuda:1", ...: JAX's platform, then its index).
 
@@ -810,6 +815,18 @@ def _same_arrays(a: list, b: list) -> bool:
     return all(np.array_equal(np.asarray(x), np.asarray(y)) for x, y in zip(a, b, strict=True))
 
 
+def matmul_precision() -> str:
+    """The matrix-multiply precision rigidbench's MJX programs are traced with (`jax.default_matmul_precision`, set
+    inside each program, so a user's own JAX code keeps its own): float32's own, "highest", unless the environment's
+    ``JAX_DEFAULT_MATMUL_PRECISION`` names another.
+
+    On an NVIDIA H100, JAX's default lets float32 matrix products run in TF32 (a 10-bit mantissa): a light projectile
+    (m2 / m1 = 9.3e3) then kept its momentum to 3.06e-4, against 6.8e-7 with "highest" and the float32 floor's
+    4.5e-5 (docs/engines.md). The floors are float32's, so the programs run float32. A CPU has no TF32.
+    """
+    return os.environ.get("JAX_DEFAULT_MATMUL_PRECISION") or "highest"
+
+
 def _mjx_scan(m, d0, time, qpos, qvel, controls):
     """One world's rollout inside a jitted program: `jax.lax.scan` of `mjx.step` over the controls from `d0` at
     (time, qpos, qvel); the qpos and qvel after each step."""
@@ -820,7 +837,8 @@ def _mjx_scan(m, d0, time, qpos, qvel, controls):
         d = mjx.step(m, d.replace(ctrl=c))
         return d, (d.qpos, d.qvel)
 
-    return jax.lax.scan(body, d0.replace(time=time, qpos=qpos, qvel=qvel), controls)[1]
+    with jax.default_matmul_precision(matmul_precision()):
+        return jax.lax.scan(body, d0.replace(time=time, qpos=qpos, qvel=qvel), controls)[1]
 
 
 @functools.cache
@@ -1244,7 +1262,8 @@ def _mjx_worlds_program(donate: bool, m_def, d_def, m_plan: tuple, d_plan: tuple
             nu, nv = d.ctrl.shape[0], d.qfrc_applied.shape[0]
             xfrc = inputs[nu + nv :].reshape(d.xfrc_applied.shape)
             d = d.replace(ctrl=inputs[:nu], qfrc_applied=inputs[nu : nu + nv], xfrc_applied=xfrc)
-            d = jax.lax.fori_loop(0, nstep, lambda _, d: mjx.step(m, d), d)
+            with jax.default_matmul_precision(matmul_precision()):  # float32's own, not TF32 (`matmul_precision`)
+                d = jax.lax.fori_loop(0, nstep, lambda _, d: mjx.step(m, d), d)
             return _pack(jax.tree_util.tree_leaves(d), d_plan, jax.numpy), jax.numpy.concatenate([d.qpos, d.qvel])
 
         return jax.vmap(one)(d_bufs, inputs)

@@ -816,3 +816,14 @@ def test_float32_floors_of_a_slow_slide_carry_the_steady_change(fake_engine):
     assert not unresolved and "deceleration bias" in scored.reason
     assert scored.tolerance >= check.tolerance + q * eps * prep.prediction["time-to-roll"] * (1 - 1e-9)
     assert scenario._roundoff_check(check, prep.prediction, "float64", prep.nstep) == (check, False)
+
+
+def test_mjx_programs_run_float32_matrix_products_unless_the_user_says(monkeypatch):
+    """The MJX programs are traced with float32's own matrix products ("highest": on an H100 JAX's default TF32 cost
+    a light projectile's momentum 3.06e-4 against 6.8e-7), recorded with every row; ``JAX_DEFAULT_MATMUL_PRECISION``
+    set by the user wins, and is what the row records."""
+    monkeypatch.delenv("JAX_DEFAULT_MATMUL_PRECISION", raising=False)
+    assert engines.matmul_precision() == "highest"
+    assert engines.MjxEngine().record()["matmul_precision"] == "highest"
+    monkeypatch.setenv("JAX_DEFAULT_MATMUL_PRECISION", "tensorfloat32")
+    assert engines.MjxEngine().record()["matmul_precision"] == "tensorfloat32"
