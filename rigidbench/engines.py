@@ -318,11 +318,6 @@ def roundoff_floor(precision: str, nstep: int, scale: float, *, secular: bool = 
     return floor, f"{ROUNDOFF_FACTOR:g} eps sqrt(N + 1) x scale, eps = {eps:.3g}, N = {nstep} steps, scale {scale:.3g}"
 
 
-# A body's step is resolved where the positions' rounding moves it by less than this share of its advance (the same
-# share `scenario.UNRESOLVED_FRACTION` sets for a check's floor against its quantity).
-ADVANCE_FRACTION = 0.1
-
-
 def advance_error(model: mujoco.MjModel, data: mujoco.MjData, precision: str) -> tuple[float, str]:
     """The largest relative error that storing positions in `precision` puts into one step's advance of a moving
     body at `data`'s state, and a phrase naming that body and the numbers (0 and "" on float64 or with nothing

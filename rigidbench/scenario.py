@@ -560,15 +560,15 @@ class Scenario:
         rigidbench.engines.EngineRefused
             Naming the scenario, the engine and its precision, and the numbers.
         """
-        from rigidbench.engines import ADVANCE_FRACTION, EngineRefused, advance_error
+        from rigidbench.engines import EngineRefused, advance_error
 
         if precision == "float64":
             return
         error, where = advance_error(model, data, precision)
-        if error >= ADVANCE_FRACTION:
+        if error >= UNRESOLVED_FRACTION:  # the rounding is that share of each step, as a check's floor of itself
             raise EngineRefused(
                 f"scenario '{self.slug}': engine {engine} ({precision}) cannot resolve this motion: {where} "
-                f"(resolvable: below {ADVANCE_FRACTION:g}, i.e. |v| dt >= {0.5 / ADVANCE_FRACTION:g} eps |x|)"
+                f"(resolvable: below {UNRESOLVED_FRACTION:g}, i.e. |v| dt >= {0.5 / UNRESOLVED_FRACTION:g} eps |x|)"
             )
         reason = self.precision_domain(model, data, prediction, precision)
         if reason is not None:
