@@ -120,9 +120,8 @@ class ScenarioEnv(gym.Env):
     # itself; a batched vector env on a float32 engine sets its template's to float32 before its first reset, so
     # the theory is the body that engine simulates.
     _precision = "float64"
-    _engine_name = (
-        "mujoco"  # the engine stepping it (a batched vector env's), named where its precision refuses a start
-    )
+    # The engine stepping it (a batched vector env's), named where its precision refuses a start.
+    _engine_name = "mujoco"
 
     @property
     def data(self) -> mujoco.MjData:

@@ -201,19 +201,26 @@ def run_duration(body_rate: float, precession_rate: float, step: float) -> float
     return min(5 * 2 * np.pi / slowest, MAX_FREE_STEPS * step)
 
 
+def axial_round_off(i1: float, i3: float, omega: Any) -> tuple[float, float] | None:
+    """The axial round-off in units of eps (see AXIAL_ROUND_OFF_LIMIT): eps_b / eps = kappa |omega| / |omega3|, the
+    relative error of Omega_b and the spin rate, and eps_b max(1, (A / |omega|) |Omega_b| T) / eps, omega(t)'s over
+    the run; None where omega3 or Omega_b is 0 (domains 'resolvable-rates' and 'mujoco-min-rate' refuse those)."""
+    w = np.asarray(omega, dtype=float)
+    speed = float(np.linalg.norm(w))
+    body, precession, _fastest = rates(i1, i3, w)
+    if w[2] == 0 or speed == 0 or body == 0:
+        return None
+    rate = max(i1 / i3, i3 / i1) * speed / abs(w[2])
+    phase = abs(body) * run_duration(body, precession, reference_step(i1, i3, w).value)
+    return rate, rate * max(1.0, float(np.hypot(w[0], w[1])) / speed * phase)
+
+
 def _axial_round_off(p: Mapping[str, Any]) -> str | None:
     """Domain test: eps_b max(1, (A / |omega|) |Omega_b| T) <= AXIAL_ROUND_OFF_LIMIT (see there)."""
-    w = np.asarray(p["omega"], dtype=float)
-    speed = float(np.linalg.norm(w))
-    if w[2] == 0 or speed == 0:
-        return None  # domains 'resolvable-rates' and 'mujoco-min-rate' refuse these
-    kappa = max(p["I1"] / p["I3"], p["I3"] / p["I1"])
-    eps_b = float(np.finfo(float).eps) * kappa * speed / abs(w[2])
-    body, precession, _fastest = rates(p["I1"], p["I3"], w)
-    if body == 0:
+    gains = axial_round_off(p["I1"], p["I3"], p["omega"])
+    if gains is None:
         return None
-    phase = abs(body) * run_duration(body, precession, reference_step(p["I1"], p["I3"], w).value)
-    error = eps_b * max(1.0, float(np.hypot(w[0], w[1])) / speed * phase)
+    error = float(np.finfo(float).eps) * gains[1]
     if error > AXIAL_ROUND_OFF_LIMIT:
         return (
             f"I1 = {p['I1']:.10g} kg m^2, I3 = {p['I3']:.10g} kg m^2, omega = {_vec(p['omega'])} rad/s "
@@ -228,29 +235,23 @@ AXIAL_ROUNDOFF_RULE = (
 )
 
 
-def _float32_floors(i1: float, i3: float, omega: Any, top: Any, duration: float) -> dict[str, Any]:
+def _float32_floors(i1: float, i3: float, omega: Any) -> dict[str, Any]:
     """A float32 engine's floors (`Scenario._roundoff_check`) beyond the random walk's.
 
-    - The axial round-off in units of eps (``_roundoff_eps``): float64's domain 'axial-round-off' keeps it below half
-      the 1e-8 tolerances; on float32 it is 5.4e8 times larger and is the floor of omega(t), Omega_b and the spin
-      rate. A Warp census draw (kappa = 13.4, |omega| / |omega3| = 318) had omega(t) 1.8e-3 off against the random
-      walk's 5.3e-4; this floor is 1.6e-2 there.
+    - The axial round-off in units of eps (``_roundoff_eps``, `axial_round_off`): float64's domain 'axial-round-off'
+      keeps it below half the 1e-8 tolerances; on float32 it is 5.4e8 times larger and is the floor of omega(t),
+      Omega_b and the spin rate. A Warp census draw (kappa = 13.4, |omega| / |omega3| = 318) had omega(t) 1.8e-3 off
+      against the random walk's 5.3e-4; this floor is 6.4e-3 there.
     - The world-frame momentum is read from the orientation the spin advances every step (``_roundoff_secular``):
       Warp's float32 turns the body with a bias, L_W's direction drifting 0.04-0.056 eps a step, linearly from 3e3 to
       1e5 steps (a census draw spinning at 171 rad/s: 5.3e-4 after 1.1e5 steps, 13.5 eps sqrt(N); C MuJoCo with only
-      its state rounded to float32 drifts 0.64 eps sqrt(N), a random walk).
+      its state rounded to float32 drifts 0.64 eps sqrt(N), a random walk; MJX float32 on an H100 5.29e-4).
     """
-    w = np.asarray(omega, dtype=float)
-    speed, axial = float(np.linalg.norm(w)), abs(float(w[2]))
     out: dict[str, Any] = {"_roundoff_secular": ("momentum-drift",)}
-    if speed > 0 and axial > 0:
-        rate = max(i1 / i3, i3 / i1) * speed / axial  # eps_b / eps
-        phase = abs(top.body_rate) * duration
-        out["_roundoff_eps"] = {
-            "omega-body": rate * max(1.0, float(np.hypot(w[0], w[1])) / speed * phase),
-            "body-rate": rate,
-            "spin-rate": rate,
-        }
+    gains = axial_round_off(i1, i3, omega)
+    if gains is not None:
+        rate, omega_body = gains
+        out["_roundoff_eps"] = {"omega-body": omega_body, "body-rate": rate, "spin-rate": rate}
         out["_roundoff_eps_rule"] = AXIAL_ROUNDOFF_RULE
     return out
 
@@ -354,7 +355,7 @@ class FreeSymmetricTop(Scenario):
         step = reference_step(i1, i3, motion.omega_B[0]).value
         return {
             "_theory": top,
-            **_float32_floors(i1, i3, motion.omega_B[0], top, run_duration(top.body_rate, top.precession_rate, step)),
+            **_float32_floors(i1, i3, motion.omega_B[0]),
             "omega-body": 0.0,
             "body-rate": top.body_rate,
             "precession-rate": top.precession_rate,
