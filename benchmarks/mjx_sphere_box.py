@@ -44,11 +44,13 @@ def main() -> None:
     )
     args = parser.parse_args()
 
-    import jax
-
+    try:
+        import jax
+        from mujoco import mjx
+    except ImportError:
+        parser.exit(2, "mjx_sphere_box.py: needs MJX: pip install 'rigidbench[mjx]'\n")
     jax.config.update("jax_enable_x64", not args.float32)
     import mujoco
-    from mujoco import mjx
 
     scale = args.scale
     half_width, radius, depth = args.half_width * scale, 0.008 * scale, DEPTH * scale
