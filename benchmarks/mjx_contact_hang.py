@@ -100,16 +100,19 @@ def export(path: str, folder: str) -> int:
     model, states = row["model"], row["states0"]
     if row["control"] is not None and model.nu:
         raise SystemExit("mjx_contact_hang.py: the captured rollout has controls; --plain replays none")
-    os.makedirs(folder, exist_ok=True)
-    mujoco.mj_saveModel(model, os.path.join(folder, "model.mjb"), None)
-    nq, nv = model.nq, model.nv
-    np.savez(
-        os.path.join(folder, "worlds.npz"),
-        time=states[:, 0],
-        qpos=states[:, 1 : 1 + nq],
-        qvel=states[:, 1 + nq : 1 + nq + nv],
-        nstep=row["nstep"],
-    )
+    try:
+        os.makedirs(folder, exist_ok=True)
+        mujoco.mj_saveModel(model, os.path.join(folder, "model.mjb"), None)
+        nq, nv = model.nq, model.nv
+        np.savez(
+            os.path.join(folder, "worlds.npz"),
+            time=states[:, 0],
+            qpos=states[:, 1 : 1 + nq],
+            qvel=states[:, 1 + nq : 1 + nq + nv],
+            nstep=row["nstep"],
+        )
+    except (OSError, ValueError) as exc:
+        raise SystemExit(f"mjx_contact_hang.py: cannot write the rollout to {folder!r}: {exc}") from None
     return len(states)
 
 
