@@ -173,6 +173,11 @@ class Check:
 # that could not fail.
 UNRESOLVED_FRACTION = 0.1
 
+# The prediction's entries keyed by check name (`Scenario.check_prediction_keys`): a tolerance that depends on the
+# run (`Scenario._scaled_check`), and a float32 engine's round-off scale, secular quantities and derived floors
+# (`Scenario.roundoff_scale`, `Scenario._roundoff_check`).
+PER_CHECK = ("_tolerance", "_roundoff_scale", "_roundoff_secular", "_roundoff_eps")
+
 
 @dataclass(frozen=True)
 class Outcome:
@@ -428,6 +433,25 @@ class Scenario:
             f"unknown case '{name}' for scenario '{self.slug}'; valid: {', '.join(c.name for c in self.cases)}"
         )
 
+    def check_prediction_keys(self, prediction: Mapping[str, Any]) -> None:
+        """Refuse a prediction whose per-check entries (`PER_CHECK`: tolerances, round-off scales and floors) name a
+        check this scenario does not have: a misspelt or renamed key would silently drop what it carries (a
+        subclass renaming a check must rename it in each of them).
+
+        Raises
+        ------
+        TypeError
+            Naming the entry and the unknown check.
+        """
+        names = {c.name for c in self.checks}
+        for entry in PER_CHECK:
+            unknown = sorted(set(prediction.get(entry, ())) - names)
+            if unknown:
+                raise TypeError(
+                    f"scenario '{self.slug}': prediction[{entry!r}] names {unknown}, not checks of this scenario "
+                    f"({sorted(names)})"
+                )
+
     def check(self, name: str) -> Check:
         return next(c for c in self.checks if c.name == name)
 
@@ -644,6 +668,7 @@ class Scenario:
             model, data = stored(model, data, engine.precision)
             actual = self.read_params(model)
         prediction = self.predict(model, data)
+        self.check_prediction_keys(prediction)
         if engine is not None:
             self.check_precision(model, data, prediction, engine.name, engine.precision)
         duration = float(self.duration(prediction))
