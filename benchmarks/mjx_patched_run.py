@@ -1,0 +1,103 @@
+"""Run rigidbench targets on MJX with one of MJX's findings patched in this process (docs/engines.md, Findings).
+
+A check that MJX fails where C MuJoCo passes is a finding only once its cause is shown. This script shows it the
+direct way: the same target on MJX, once as installed and once with the suspected function replaced in-process
+(nothing on disk changes), and every check's error for both. What each patch replaces:
+
+* ``small-rotation``: `mjx._src.math.norm` treats a vector as zero where ``jnp.allclose(x, 0.0)`` (atol 1e-8), so
+  `quat_integrate` never turns a body whose angular velocity components are all below 1e-8 rad/s. Patched, only an
+  exactly-zero vector is zero. (ball-stick light-ball on MJX float64: energy 3.99e-5 off, 2.84e-6 patched.)
+* ``line-search``: `mjx._src.solver._linesearch` keeps a step only where the total cost fell (``<``); patched, where
+  it did not rise (``<=``). Only a probe: it fixes `benchmarks/mjx_linesearch.py`'s states, not every state; the
+  whole effect is removed by ``--option warmstart=disable``, which needs no patch.
+
+    python benchmarks/mjx_patched_run.py --patch small-rotation ball-stick:light-ball --precision float64 \\
+        --set mass=0.009024128553485023 --set length=96.47017487928969 --set ball_mass=1.301032418032902e-07 \\
+        --set ball_speed=0.00013754161961767138 --set offset=22.355119268813667
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import json
+import subprocess
+import sys
+import textwrap
+
+PATCHES = {
+    "small-rotation": ("math", "norm", "is_zero = jp.allclose(x, 0.0)", "is_zero = jp.all(x == 0.0)"),
+    "line-search": (
+        "solver",
+        "_linesearch",
+        "improved = (lo.cost < p0.cost) | (hi.cost < p0.cost)",
+        "improved = (lo.cost <= p0.cost) | (hi.cost <= p0.cost)",
+    ),
+}
+
+
+def patch(name: str) -> None:
+    """Replace one MJX function in its module (its source with one line changed), before anything is traced."""
+    import importlib
+
+    module_name, function, old, new = PATCHES[name]
+    module = importlib.import_module(f"mujoco.mjx._src.{module_name}")
+    source = textwrap.dedent(inspect.getsource(getattr(module, function)))
+    if old not in source:
+        raise SystemExit(f"mjx_patched_run.py: this MJX's {module_name}.{function} no longer has {old!r}")
+    exec(compile(source.replace(old, new), module.__file__, "exec"), module.__dict__)  # noqa: S102
+
+
+def run(targets: list[str], overrides: dict[str, str], precision: str | None) -> list[dict]:
+    """Every check of the targets on MJX, in this process."""
+    from rigidbench import runner
+    from rigidbench.settings import Settings
+
+    settings = Settings(engine="mjx", precision=precision)
+    jobs = runner.plan(targets, overrides, settings)
+    keep = ("scenario", "case", "check", "error", "tolerance", "status")
+    return [{k: row[k] for k in keep} for job in jobs for row in runner.run_job(job, settings)]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("targets", nargs="+", help="scenario or scenario:case")
+    parser.add_argument("--patch", choices=sorted(PATCHES), required=True)
+    parser.add_argument("--precision", choices=("float32", "float64"), default=None)
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="a parameter override")
+    parser.add_argument("--worker", choices=("plain", "patched"), help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    try:
+        import mujoco.mjx  # noqa: F401
+    except ImportError:
+        parser.exit(2, "mjx_patched_run.py: needs MJX: pip install 'rigidbench[mjx]'\n")
+    bad = [item for item in args.set if "=" not in item]
+    if bad:
+        parser.error(f"--set {bad[0]!r}: expected NAME=VALUE")
+    if args.worker:  # one of the two runs, in a process of its own (a compiled program keeps what it traced)
+        if args.worker == "patched":
+            patch(args.patch)
+        print(json.dumps(run(args.targets, dict(item.split("=", 1) for item in args.set), args.precision)))
+        return
+    rows = []
+    for mode in ("plain", "patched"):
+        out = subprocess.run(
+            [sys.executable, __file__, *sys.argv[1:], "--worker", mode], capture_output=True, text=True
+        )
+        if out.returncode != 0:
+            parser.exit(out.returncode, out.stderr[-3000:])
+        rows.append(json.loads(out.stdout.splitlines()[-1]))
+    print(
+        f"MJX with {args.patch!r} patched ({PATCHES[args.patch][0]}.{PATCHES[args.patch][1]}: {PATCHES[args.patch][3]})"
+    )
+    print(f"{'target':32s} {'check':24s} {'as installed':>18s} {'patched':>18s} {'tolerance':>10s}")
+    for before, after in zip(*rows, strict=True):
+        target = f"{before['scenario']}:{before['case']}"
+        print(
+            f"{target:32s} {before['check']:24s} {before['error']:>10.3g} {before['status']:>7s} "
+            f"{after['error']:>10.3g} {after['status']:>7s} {before['tolerance']:>10.3g}"
+        )
+
+
+if __name__ == "__main__":
+    main()
