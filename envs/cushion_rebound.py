@@ -150,10 +150,10 @@ class CushionRebound(CueStrike):
     def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
         out = super().predict(model, data)
         out["rebound-slip"] = out.pop("initial-slip")
-        # and in every entry keyed by check (`scenario.PER_CHECK`): the float32 floors of the slip are keyed by it
-        # too (an MJX float32 census draw scored its rebound slip with none of them while they were left behind)
-        # (`Scenario.check_prediction_keys` refuses a key naming no check), and the cue strike's checks this
-        # scenario does not have (skid distance, energy lost) left out
+        # The same in every entry keyed by check (`scenario.PER_CHECK`): the slip's float32 floors are keyed by it
+        # too (left behind under the old name, an MJX float32 census draw scored its rebound slip with none). The
+        # cue strike's checks this scenario lacks (skid distance, energy lost) are dropped from them:
+        # `Scenario.check_prediction_keys` refuses a key that names no check.
         names = {c.name for c in CHECKS}
         for entry in PER_CHECK:
             keyed = out.get(entry)
