@@ -7,6 +7,8 @@ direct way: the same target on MJX, once as installed and once with the suspecte
 * ``small-rotation``: `mjx._src.math.norm` treats a vector as zero where ``jnp.allclose(x, 0.0)`` (atol 1e-8), so
   `quat_integrate` never turns a body whose angular velocity components are all below 1e-8 rad/s. Patched, only an
   exactly-zero vector is zero. (ball-stick light-ball on MJX float64: energy 3.99e-5 off, 2.84e-6 patched.)
+* ``sphere-box-edge``: `mjx._src.math.closest_segment_point` divides by ``|b - a|^2 + 1e-6`` (absolute m^2), which
+  tilts a sphere-box contact past a face's short edge (`benchmarks/mjx_sphere_box.py`); patched, by ``|b - a|^2``.
 * ``line-search``: `mjx._src.solver._linesearch` keeps a step only where the total cost fell (``<``); patched, where
   it did not rise (``<=``). Only a probe: it fixes `benchmarks/mjx_linesearch.py`'s states, not every state; the
   whole effect is removed by ``--option warmstart=disable``, which needs no patch.
@@ -27,6 +29,12 @@ import textwrap
 
 PATCHES = {
     "small-rotation": ("math", "norm", "is_zero = jp.allclose(x, 0.0)", "is_zero = jp.all(x == 0.0)"),
+    "sphere-box-edge": (
+        "math",
+        "closest_segment_point",
+        "t = jp.dot(pt - a, ab) / (jp.dot(ab, ab) + 1e-6)",
+        "t = jp.dot(pt - a, ab) / jp.maximum(jp.dot(ab, ab), 1e-30)",
+    ),
     "line-search": (
         "solver",
         "_linesearch",

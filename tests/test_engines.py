@@ -881,6 +881,27 @@ def test_float32_floors_of_a_slow_slide_carry_the_steady_change(fake_engine):
     assert scenario._roundoff_check(check, prep.prediction, "float64", prep.nstep) == (check, False)
 
 
+def test_float32_floor_of_the_energy_lost_follows_the_final_speeds(fake_engine):
+    """cue-strike: the energy lost is 1 - E_f / E_0 with E_f ~ v_f^2, so the final speed's float32 floor moves it by
+    2 (1 - lost) times that floor's relative size. The MJX census draw (seed 3) at mu = 0.0011 lost 0.0244 of its
+    energy against 0.0307 (6.4e-3 off, its final speed 3.3e-3 off within a floor of 9.7e-3); q times the energy
+    lost allowed 2.7e-3. Float64 keeps its tolerance."""
+    params = {"radius": 0.0012116989530826117, "mass": 0.0002422063612073706, "mu": 0.0010903958746026694}
+    params |= {"height": 0.0003129240106726802, "g": 0.11018248093017988, "speed": 0.0017375542705462352}
+    scenario = registry.get("cue-strike")
+    prep = scenario.prepare("centre", params, Settings(engine="mjx"))
+    theory = prep.prediction["_theory"]
+
+    def floor(name: str, precision: str) -> float:
+        check = scenario._scaled_check(name, prep.prediction)
+        return scenario._roundoff_check(check, prep.prediction, precision, prep.nstep)[0].tolerance - check.tolerance
+
+    final = floor("final-speed", "float32")
+    assert floor("energy-lost", "float32") == pytest.approx(2 * (1 - theory.energy_lost) * final, rel=1e-9)
+    assert floor("energy-lost", "float32") > 6.4e-3  # the MJX draw's error
+    assert floor("energy-lost", "float64") == 0
+
+
 def test_mjx_programs_run_float32_matrix_products_unless_the_user_says(monkeypatch):
     """The MJX programs are traced with float32's own matrix products ("highest": on an H100 JAX's default TF32 cost
     a light projectile's momentum 3.06e-4 against 6.8e-7), recorded with every row; ``JAX_DEFAULT_MATMUL_PRECISION``
