@@ -56,12 +56,14 @@ def patch(name: str) -> None:
     exec(compile(source.replace(old, new), module.__file__, "exec"), module.__dict__)  # noqa: S102
 
 
-def run(targets: list[str], overrides: dict[str, str], precision: str | None) -> list[dict]:
-    """Every check of the targets on MJX, in this process."""
+def run(targets: list[str], overrides: dict[str, str], precision: str | None, options: dict[str, str]) -> list[dict]:
+    """Every check of the targets on MJX, in this process (`options`: as ``rigidbench run --option``)."""
+    import dataclasses
+
     from rigidbench import runner
     from rigidbench.settings import Settings
 
-    settings = Settings(engine="mjx", precision=precision)
+    settings = dataclasses.replace(Settings.from_options(options), engine="mjx", precision=precision)
     jobs = runner.plan(targets, overrides, settings)
     keep = ("scenario", "case", "check", "error", "tolerance", "status")
     return [{k: row[k] for k in keep} for job in jobs for row in runner.run_job(job, settings)]
@@ -73,19 +75,23 @@ def main() -> None:
     parser.add_argument("--patch", choices=sorted(PATCHES), required=True)
     parser.add_argument("--precision", choices=("float32", "float64"), default=None)
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="a parameter override")
+    parser.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="as rigidbench run's")
     parser.add_argument("--worker", choices=("plain", "patched"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     try:
         import mujoco.mjx  # noqa: F401
     except ImportError:
         parser.exit(2, "mjx_patched_run.py: needs MJX: pip install 'rigidbench[mjx]'\n")
-    bad = [item for item in args.set if "=" not in item]
-    if bad:
-        parser.error(f"--set {bad[0]!r}: expected NAME=VALUE")
+    for flag, items in (("--set", args.set), ("--option", args.option)):
+        bad = [item for item in items if "=" not in item]
+        if bad:
+            parser.error(f"{flag} {bad[0]!r}: expected NAME=VALUE")
+    options = dict(item.split("=", 1) for item in args.option)
     if args.worker:  # one of the two runs, in a process of its own (a compiled program keeps what it traced)
         if args.worker == "patched":
             patch(args.patch)
-        print(json.dumps(run(args.targets, dict(item.split("=", 1) for item in args.set), args.precision)))
+        overrides = dict(item.split("=", 1) for item in args.set)
+        print(json.dumps(run(args.targets, overrides, args.precision, options)))
         return
     rows = []
     for mode in ("plain", "patched"):
@@ -95,9 +101,9 @@ def main() -> None:
         if out.returncode != 0:
             parser.exit(out.returncode, out.stderr[-3000:])
         rows.append(json.loads(out.stdout.splitlines()[-1]))
-    print(
-        f"MJX with {args.patch!r} patched ({PATCHES[args.patch][0]}.{PATCHES[args.patch][1]}: {PATCHES[args.patch][3]})"
-    )
+    module, function, _, replaced = PATCHES[args.patch]
+    also = f"; both runs with options {options}" if options else ""
+    print(f"MJX with {args.patch!r} patched ({module}.{function}: {replaced}){also}")
     print(f"{'target':32s} {'check':24s} {'as installed':>18s} {'patched':>18s} {'tolerance':>10s}")
     for before, after in zip(*rows, strict=True):
         target = f"{before['scenario']}:{before['case']}"
