@@ -91,15 +91,20 @@ def main() -> None:
         if args.worker == "patched":
             patch(args.patch)
         overrides = dict(item.split("=", 1) for item in args.set)
-        print(json.dumps(run(args.targets, overrides, args.precision, options)))
+        try:
+            rows = run(args.targets, overrides, args.precision, options)
+        except ValueError as exc:  # an unknown target, parameter or option, a refused case: one line
+            parser.exit(2, f"mjx_patched_run.py: {exc}\n")
+        print(json.dumps(rows))
         return
     rows = []
     for mode in ("plain", "patched"):
         out = subprocess.run(
             [sys.executable, __file__, *sys.argv[1:], "--worker", mode], capture_output=True, text=True
         )
-        if out.returncode != 0:
-            parser.exit(out.returncode, out.stderr[-3000:])
+        if out.returncode != 0:  # the worker's own last line (above it: JAX's and Warp's warnings)
+            lines = [line for line in out.stderr.splitlines() if line.strip()]
+            parser.exit(out.returncode, (lines[-1] if lines else f"worker exited {out.returncode}") + "\n")
         rows.append(json.loads(out.stdout.splitlines()[-1]))
     module, function, _, replaced = PATCHES[args.patch]
     also = f"; both runs with options {options}" if options else ""
@@ -114,4 +119,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except KeyboardInterrupt:  # the workers get the same signal and stop; nothing is written
+        sys.exit("mjx_patched_run.py: interrupted")
