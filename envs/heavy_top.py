@@ -917,8 +917,8 @@ def _roundoff_scales(prediction: Mapping[str, Any], duration: float) -> dict[str
     sin_theta = max(math.sin(float(prediction["theta-min"])), math.sin(float(prediction["theta-max"])))
     for name in ("mean-precession", "precession-rate"):
         rate = abs(float(prediction.get(name, 0.0)))
-        if rate > 0 and sin_theta > 0:
-            scales[name] = max(1.0, 1.0 / (rate * duration * sin_theta))
+        if rate > 0:  # at a pole the azimuth is not defined at all: an infinite scale, unresolved on float32
+            scales[name] = max(1.0, 1.0 / (rate * duration * sin_theta)) if sin_theta > 0 else math.inf
     top = prediction["_theory"]
     for name, u in (("precession-at-theta-min", top.roots[1]), ("precession-at-theta-max", top.roots[0])):
         difference = abs(top.b - top.a * u)
