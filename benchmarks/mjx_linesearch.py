@@ -119,4 +119,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except KeyboardInterrupt:  # nothing is written: one line, not a traceback
+        raise SystemExit("mjx_linesearch.py: interrupted") from None

@@ -154,7 +154,7 @@ class CushionRebound(CueStrike):
         # too (left behind under the old name, an MJX float32 census draw scored its rebound slip with none). The
         # cue strike's checks this scenario lacks (skid distance, energy lost) are dropped from them:
         # `Scenario.check_prediction_keys` refuses a key that names no check.
-        names = {c.name for c in CHECKS}
+        names = {c.name for c in self.checks}
         for entry in PER_CHECK:
             keyed = out.get(entry)
             if isinstance(keyed, dict):
