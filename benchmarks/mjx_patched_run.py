@@ -1,8 +1,9 @@
-"""Run rigidbench targets on MJX with one of MJX's findings patched in this process (docs/engines.md, Findings).
+"""Run rigidbench targets on MJX with one or more of MJX's findings patched in this process (docs/engines.md, Findings).
 
 A check that MJX fails where C MuJoCo passes is a finding only once its cause is shown. This script shows it the
-direct way: the same target on MJX, once as installed and once with the suspected function replaced in-process
-(nothing on disk changes), and every check's error for both. What each patch replaces:
+direct way: the same target on MJX, once as installed and once with the suspected functions replaced in-process
+(nothing on disk changes; ``--patch`` may be given more than once), and every check's error for both. What each
+patch replaces:
 
 * ``small-rotation``: `mjx._src.math.norm` treats a vector as zero where ``jnp.allclose(x, 0.0)`` (atol 1e-8), so
   `quat_integrate` never turns a body whose angular velocity components are all below 1e-8 rad/s. Patched, only an
@@ -72,7 +73,7 @@ def run(targets: list[str], overrides: dict[str, str], precision: str | None, op
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("targets", nargs="+", help="scenario or scenario:case")
-    parser.add_argument("--patch", choices=sorted(PATCHES), required=True)
+    parser.add_argument("--patch", choices=sorted(PATCHES), action="append", required=True, help="repeatable")
     parser.add_argument("--precision", choices=("float32", "float64"), default=None)
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="a parameter override")
     parser.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="as rigidbench run's")
@@ -89,7 +90,8 @@ def main() -> None:
     options = dict(item.split("=", 1) for item in args.option)
     if args.worker:  # one of the two runs, in a process of its own (a compiled program keeps what it traced)
         if args.worker == "patched":
-            patch(args.patch)
+            for name in args.patch:
+                patch(name)
         overrides = dict(item.split("=", 1) for item in args.set)
         try:
             rows = run(args.targets, overrides, args.precision, options)
@@ -106,9 +108,9 @@ def main() -> None:
             lines = [line for line in out.stderr.splitlines() if line.strip()]
             parser.exit(out.returncode, (lines[-1] if lines else f"worker exited {out.returncode}") + "\n")
         rows.append(json.loads(out.stdout.splitlines()[-1]))
-    module, function, _, replaced = PATCHES[args.patch]
     also = f"; both runs with options {options}" if options else ""
-    print(f"MJX with {args.patch!r} patched ({module}.{function}: {replaced}){also}")
+    patched = ", ".join(f"{name!r} ({PATCHES[name][0]}.{PATCHES[name][1]}: {PATCHES[name][3]})" for name in args.patch)
+    print(f"MJX with {patched} patched{also}")
     print(f"{'target':32s} {'check':24s} {'as installed':>18s} {'patched':>18s} {'tolerance':>10s}")
     for before, after in zip(*rows, strict=True):
         target = f"{before['scenario']}:{before['case']}"

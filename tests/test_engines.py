@@ -228,7 +228,9 @@ def test_batched_vector_env_on_a_float32_engine_follows_c_within_its_floor(name,
     batched = gym.make_vec(vector_id, num_envs=n, vectorization_mode="vector_entry_point", engine=name)
     obs_c, _ = sync.reset(seed=0)
     obs_e, _ = batched.reset(seed=0)
-    frame_skip = batched.unwrapped.env.frame_skip
+    template = batched.unwrapped.env  # scores the body the engine simulates: its model as float32 stores it
+    assert np.array_equal(template.model.body_mass, template.model.body_mass.astype(np.float32))
+    frame_skip = template.frame_skip
     rng = np.random.default_rng(0)
     for k in range(1, calls + 1):
         if k % 3 == 1:  # held for three steps: a repeated action as well as a new one

@@ -9,8 +9,10 @@ rewards, terminations, truncations and every number in ``info``, through autores
 import math
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 import pytest
+from gymnasium.utils.env_checker import data_equivalence
 
 from rigidbench.registry import env_classes
 
@@ -171,3 +173,39 @@ def test_batched_hooks_equal_the_per_copy_fallbacks():
         actions = rng.uniform(-1, 1, fast.action_space.shape) * fast.single_action_space.high
         for a, b in zip(fast.step(actions)[:4], plain.step(actions)[:4], strict=True):
             np.testing.assert_array_equal(a, b)
+
+
+def test_a_reset_of_the_same_configuration_starts_as_a_fresh_env(validation_env_id):
+    """A reset of the configuration the env ran last restores its kept start (`ScenarioEnv._load`: parameters,
+    state and prediction computed once, the state copied back into the episode's MjData): the same state, observation,
+    info and next steps as a fresh env's first reset, bit for bit."""
+    env = gym.make(validation_env_id).unwrapped
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-0.5, 0.5, (6, *env.action_space.shape))
+    for action in actions[:3]:
+        env.step(action)
+    again, fresh = env.reset(), gym.make(validation_env_id).unwrapped.reset()
+    assert data_equivalence(again, fresh, exact=True)
+    env2 = gym.make(validation_env_id).unwrapped
+    env2.reset()
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    states = [np.empty(mujoco.mj_stateSize(e.model, spec)) for e in (env, env2)]
+    for e, state in zip((env, env2), states, strict=True):
+        mujoco.mj_getState(e.model, e.data, state, spec)
+    np.testing.assert_array_equal(states[0], states[1])
+    assert env.params is not env2.params and env.params == env2.params
+    for action in actions[3:]:
+        assert data_equivalence(env.step(action), env2.step(action), exact=True)
+
+
+def test_a_template_set_to_float32_after_construction_loads_the_float32_model():
+    """`VectorScenarioEnv` on a float32 engine sets its template's precision after the template's constructor loaded
+    the float64 model of the same parameters; the next reset must load the model rounded to float32 (the body the
+    engine simulates and the theory predicts for), not the float64 one kept from the constructor."""
+    env = gym.make("rigidbench/HeavyTop-v0").unwrapped
+    env._precision, env._engine_name = "float32", "mjx"
+    env.reset()
+    for values in (env.model.body_mass, env.model.body_inertia, env.model.body_ipos):
+        np.testing.assert_array_equal(values, values.astype(np.float32))
+    assert env.model.opt.timestep == float(np.float32(env.model.opt.timestep))
