@@ -192,6 +192,26 @@ def test_mjx_keeps_its_warm_start_where_a_correction_is_below_the_rounding_of_it
         assert ratios[wrong] > 100 and ratios[right] == pytest.approx(1, abs=1e-3), out.stdout
 
 
+def test_mjx_does_not_turn_a_body_slower_than_1e_8_rad_per_s():
+    """The finding `benchmarks/mjx_small_rotation.py` reproduces, checked against the installed MJX (a fix fails this
+    test: docs/engines.md's finding and the draws it explains are then to be rerun): a free box spinning at 5e-9
+    rad/s turns 5e-9 rad in 1 s on C MuJoCo and not at all on MJX float64; at 2e-8 rad/s both turn it."""
+    pytest.importorskip("mujoco.mjx")
+    import subprocess
+    import sys
+
+    script = str(Path(__file__).parents[1] / "benchmarks" / "mjx_small_rotation.py")
+    out = subprocess.run([sys.executable, script], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-2000:]
+    rows = {
+        line.split()[0]: [float(x) for x in line.split()[1:4]] for line in out.stdout.splitlines() if "e-" in line[:14]
+    }
+    expected, c_angle, mjx_angle = rows["5e-09"]
+    assert c_angle == pytest.approx(expected, rel=1e-9) and mjx_angle == 0.0, out.stdout
+    expected, c_angle, mjx_angle = rows["2e-08"]
+    assert mjx_angle == pytest.approx(expected, rel=1e-9) and c_angle == pytest.approx(expected, rel=1e-9), out.stdout
+
+
 def test_mjx_device_it_does_not_have_is_one_line(capsys):
     pytest.importorskip("mujoco.mjx")
     assert main(["run", "pendulum:one-radian", "--engine", "mjx", "--device", "cuda:7"]) == 2
