@@ -17,6 +17,7 @@ omega, and after `--steps` steps of 1 ms each prints the angle it turned on C Mu
 from __future__ import annotations
 
 import argparse
+import sys
 
 import numpy as np
 
@@ -68,4 +69,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except KeyboardInterrupt:  # nothing is written: one line
+        sys.exit("mjx_small_rotation.py: interrupted")
