@@ -95,7 +95,8 @@ class ScenarioEnv(gym.Env):
         self.scenario.resolve(self.scenario.case(case), self._params)  # fail now, not at reset
         self._models: dict[tuple, mujoco.MjModel] = {}
         self._starts: dict[tuple, tuple] = {}  # per model: its episode's start (`_load`)
-        self._data_key: tuple | None = None  # the configuration `data` belongs to
+        self._data_key: tuple | None = None  # the configuration the last reset installed `_episode_data` for
+        self._episode_data: mujoco.MjData | None = None
         self._resolved: dict[tuple, dict[str, Any]] = {}  # per case and user parameters: `Scenario.resolve`'s values
         self._renderer: mujoco.Renderer | None = None
         self._load(self._case_name, self._params)
@@ -131,7 +132,11 @@ class ScenarioEnv(gym.Env):
     def data(self) -> mujoco.MjData:
         """The MjData being stepped. Assigning another one (a new episode, `ClosedLoopTask`'s scratch rollout, the
         dm_control view) rebinds the views a step reads and writes (`_bind_views`), so no hook has to check.
-        Per-step code may read `self._data` directly: the same object, without the property's ~40 ns."""
+        Per-step code may read `self._data` directly: the same object, without the property's ~40 ns.
+
+        A reset of the configuration the env ran last puts the start back into the MjData that configuration's last
+        reset installed (`_load`): copy an episode's final state (``copy.copy(env.data)``) to keep it past a reset.
+        An MjData assigned from outside is never written by a reset."""
         return self._data
 
     @data.setter
@@ -375,7 +380,7 @@ class ScenarioEnv(gym.Env):
         state = self.__dict__.copy()
         state["_renderer"] = None
         state["_starts"] = {}  # initial states of this env's models: a copy's models are new objects, so are these
-        state["_data_key"] = None
+        state["_data_key"] = state["_episode_data"] = None
         for name in self._recomputed:
             state.pop(name, None)
         return state
@@ -413,6 +418,8 @@ class ScenarioEnv(gym.Env):
 
     @property
     def prediction(self) -> Mapping[str, Any]:
+        """The theory's prediction for the current configuration, computed once and shared by every episode of it
+        (`_load`): read it, do not change it."""
         return self._prediction
 
     def _load(self, case: str, params: Mapping[str, Any]) -> None:
@@ -439,8 +446,8 @@ class ScenarioEnv(gym.Env):
             start = (actual, copy.copy(data), prediction, float(self.scenario.duration(prediction)))
             start += (read_settings(self.model),)
             self._starts[key] = start
-        elif self._data_key == key:  # the last episode's configuration: its MjData, put back in the initial state
-            data = self._data
+        elif self._data_key == key:  # the last episode's configuration: the MjData it installed, back at the start
+            data = self._episode_data  # not `self._data`, which may be a caller's own by now (`rigidbench.suite`)
             mujoco.mj_copyData(data, self.model, start[1])
         else:
             data = copy.copy(start[1])
@@ -448,7 +455,7 @@ class ScenarioEnv(gym.Env):
         # initial state and prediction are computed once and kept with its model, and the state is copied into the
         # episode's MjData (an autoreset cost a HeavyTop env 2.1 ms, 5 us a step of its 426-step episode: `resolve`
         # and `predict`, and a new MjData, whose 13.6 MB arena took 0.5 ms to allocate; `mj_copyData` takes 5 us).
-        self._data_key = key
+        self._data_key, self._episode_data = key, data
         actual, _, self._prediction, self.episode_duration, settings_record = start
         # Each episode's own copies: `params` hands one out, and the reset's info both (gymnasium's checker asks that
         # no two resets' infos share an object; the settings hold a dict).

@@ -209,3 +209,17 @@ def test_a_template_set_to_float32_after_construction_loads_the_float32_model():
     for values in (env.model.body_mass, env.model.body_inertia, env.model.body_ipos):
         np.testing.assert_array_equal(values, values.astype(np.float32))
     assert env.model.opt.timestep == float(np.float32(env.model.opt.timestep))
+
+
+def test_a_reset_never_writes_an_mjdata_assigned_from_outside():
+    """`rigidbench.suite` binds its env to dm_control's own MjData; a reset of the same configuration puts the start
+    back into the MjData the env installed, never into the one assigned to it (it wiped dm_control's task state)."""
+    env = gym.make("rigidbench/HeavyTop-v0").unwrapped
+    env.reset()
+    own = env.data
+    other = mujoco.MjData(env.model)
+    before = (other.qpos.copy(), other.qvel.copy(), other.time)
+    env.data = other
+    env.reset()
+    assert env.data is own
+    assert np.array_equal(other.qpos, before[0]) and np.array_equal(other.qvel, before[1]) and other.time == before[2]
