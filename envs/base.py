@@ -92,12 +92,12 @@ class ScenarioEnv(gym.Env):
         self._width, self._height = int(width), int(height)
         self._case_name = self.scenario.case(case).name
         self._params = dict(params or {})
-        self.scenario.resolve(self.scenario.case(case), self._params)  # fail now, not at reset
+        self._resolved: dict[tuple, dict[str, Any]] = {}  # per case and user parameters: `Scenario.resolve`'s values
+        self._resolve(self._case_name, self._params)  # fail now, not at reset (and kept for the first reset)
         self._models: dict[tuple, mujoco.MjModel] = {}
         self._starts: dict[tuple, tuple] = {}  # per model: its episode's start (`_load`)
         self._data_key: tuple | None = None  # the configuration the last reset installed `_episode_data` for
         self._episode_data: mujoco.MjData | None = None
-        self._resolved: dict[tuple, dict[str, Any]] = {}  # per case and user parameters: `Scenario.resolve`'s values
         self._renderer: mujoco.Renderer | None = None
         self._load(self._case_name, self._params)
         self.observation_space = self._observation_space()
