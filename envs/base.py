@@ -266,6 +266,15 @@ class ScenarioEnv(gym.Env):
         return obs, info
 
     def step(self, action):
+        obs, k, time, finite = self._physics_step(action)
+        if not finite:
+            return self._diverged_step(obs, k, time)
+        info = self._step_info(obs, k, time)
+        return obs, info["reward_deviation"], False, time >= self._end, info
+
+    def _physics_step(self, action) -> tuple[np.ndarray, int, float, bool]:
+        """The physics half of `step`, shared with a batched vector env of one (`VectorScenarioEnv`): the action
+        applied, the frame skip's steps taken; the observation, step count, time, and whether the step is sound."""
         # Every line here runs once per step (issue 8): look-ups that are not free (model.opt, data.time, the
         # observable names, the episode's end) are cached by `_load` or read once, and each hook is called once.
         self._apply_action(self._checked_action(action))
@@ -275,10 +284,7 @@ class ScenarioEnv(gym.Env):
         obs = self._observation()
         time = data.time
         # `_diverged`, inlined: time fell behind (MuJoCo reset a blown-up state) or the observation is not finite.
-        if time < self._behind + k * self._env_dt or not math.isfinite(sum(obs.tolist())):  # obs is 1-D
-            return self._diverged_step(obs, k, time)
-        info = self._step_info(obs, k, time)
-        return obs, info["reward_deviation"], False, time >= self._end, info
+        return obs, k, time, not time < self._behind + k * self._env_dt and math.isfinite(sum(obs.tolist()))  # 1-D obs
 
     def _advance(self, data: mujoco.MjData) -> None:
         """The physics of one env step: `frame_skip` steps of `data` with the inputs the action wrote into it.
@@ -486,17 +492,8 @@ class ScenarioEnv(gym.Env):
         """The info of step `k` (0: reset), at simulated `time` (s; default ``data.time``)."""
         if time is None:
             time = self.data.time
-        predicted = self._rows[k] if k < self._table_len else self._theory(np.array([time]))[0].tolist()
-        measured = self._measure(obs)
-        deviation = self._deviation(measured, predicted)
+        measured_values, predicted, deviation = self._score(obs, k, time)
         names = self._observable_names
-        # The hook returns an ndarray or Python floats, one per observable: checked at reset (k = 0), trusted after.
-        measured_values = measured.tolist() if type(measured) is np.ndarray else measured
-        if not k and (not _all_floats(measured_values) or len(measured_values) != len(names)):
-            raise TypeError(
-                f"{type(self).__name__}._measure returned {measured!r}: an ndarray or a sequence of Python floats, "
-                f"one for each of the {len(names)} observables {names}, is required"
-            )
         if len(names) == 1:  # one observable: a dict display costs a quarter of dict(zip(...)) (~0.15 us each)
             name = names[0]
             measured_dict, predicted_dict = {name: measured_values[0]}, {name: predicted[0]}
@@ -511,6 +508,22 @@ class ScenarioEnv(gym.Env):
             "reward_deviation": -deviation if deviation <= DEVIATION_CAP else -DEVIATION_CAP,
             "diverged": False,
         }
+
+    def _score(self, obs: np.ndarray, k: int, time: float) -> tuple[list[float], list[float], float]:
+        """Step `k`'s measured and predicted observables (Python floats, in `_observable_names`' order) and the
+        deviation between them (`_step_info`'s numbers, before any dict is built)."""
+        predicted = self._rows[k] if k < self._table_len else self._theory(np.array([time]))[0].tolist()
+        measured = self._measure(obs)
+        deviation = self._deviation(measured, predicted)
+        # The hook returns an ndarray or Python floats, one per observable: checked at reset (k = 0), trusted after.
+        measured_values = measured.tolist() if type(measured) is np.ndarray else measured
+        if not k and (not _all_floats(measured_values) or len(measured_values) != len(self._observable_names)):
+            names = self._observable_names
+            raise TypeError(
+                f"{type(self).__name__}._measure returned {measured!r}: an ndarray or a sequence of Python floats, "
+                f"one for each of the {len(names)} observables {names}, is required"
+            )
+        return measured_values, predicted, deviation
 
     def _compare(self) -> tuple[float, np.ndarray, np.ndarray]:
         """Deviation, measured and predicted observables at the current state (any time, no table)."""

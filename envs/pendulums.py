@@ -482,7 +482,7 @@ class PendulumEnv(ScenarioEnv):
         if self._nq == 1:  # a lone pendulum: no loop (NaN propagates through abs and the division)
             return abs(measured[0] - predicted[0]) / self._scale
         worst = -1.0
-        for m, p in zip(measured, predicted):  # noqa: B905 (lengths checked by _step_info)
+        for m, p in zip(measured, predicted):  # noqa: B905 (lengths checked by _score)
             d = abs(m - p)
             if d > worst or d != d:
                 worst = d

@@ -223,3 +223,49 @@ def test_a_reset_never_writes_an_mjdata_assigned_from_outside():
     env.reset()
     assert env.data is own
     assert np.array_equal(other.qpos, before[0]) and np.array_equal(other.qvel, before[1]) and other.time == before[2]
+
+
+def test_a_copy_of_one_that_blows_up_ends_as_a_sync_env_of_one_does():
+    """N = 1's diverged step (`ScenarioEnv._diverged_step` through `_step_one`) and the autoreset after it: the
+    outputs of a sync vector env of one, bit for bit."""
+    sync = gym.make_vec("rigidbench/HeavyTop-v0", num_envs=1, vectorization_mode="sync")
+    batched = gym.make_vec("rigidbench/HeavyTop-v0", num_envs=1, vectorization_mode="vector_entry_point")
+    sync.reset(seed=0), batched.reset(seed=0)
+    zero = np.zeros(sync.action_space.shape)
+    for t in range(4):
+        if t == 2:  # what a blown-up integrator leaves behind, in both
+            sync.envs[0].unwrapped.data.qvel[:] = np.nan
+            batched.unwrapped.env.data.qvel[:] = np.nan
+        out_s, out_b = sync.step(zero), batched.step(zero)
+        for name, a, b in zip(("obs", "reward", "terminated", "truncated"), out_s[:4], out_b[:4], strict=True):
+            np.testing.assert_array_equal(b, a, err_msg=f"step {t}: {name}")
+        _assert_infos_equal(out_s[4], out_b[4], f"step {t}")
+        assert bool(out_b[2][0]) == (t == 2) and bool(out_b[4]["diverged"][0]) == (t == 2)
+
+
+def _leaves(info: dict, where: str = "") -> dict[str, np.ndarray]:
+    out = {}
+    for key, value in info.items():
+        if isinstance(value, dict):
+            out.update(_leaves(value, f"{where}/{key}"))
+        elif not key.startswith("_"):  # the masks are one read-only array (`rigidbench.envs.vector._MASK`)
+            out[f"{where}/{key}"] = value
+    return out
+
+
+def test_a_copy_of_ones_outputs_are_independent_arrays():
+    """`_step_one` returns the reward and the info's numbers as views of one array: writing any one of them
+    changes no other output (each is its own element)."""
+    envs = gym.make_vec("rigidbench/StruckStick-v0", num_envs=1, vectorization_mode="vector_entry_point")
+    envs.reset(seed=0)
+    obs, reward, terminated, truncated, info = envs.step(np.zeros(envs.action_space.shape))
+    outputs = {"obs": obs, "reward": reward, "terminated": terminated, "truncated": truncated, **_leaves(info)}
+    # obs, reward, terminated, truncated; time, deviation, reward_deviation, diverged; measured and predicted
+    assert len(outputs) == 4 + 4 + 2 * len(envs.unwrapped.env._observable_names)
+    for name, array in outputs.items():
+        before = {key: value.copy() for key, value in outputs.items()}
+        array[0] = 1.0 - array[0] if array.dtype == bool else -12345.0
+        for key, value in outputs.items():
+            if key != name:
+                np.testing.assert_array_equal(value, before[key], err_msg=f"writing {name} changed {key}")
+        assert not np.array_equal(array, before[name])
