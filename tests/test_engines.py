@@ -348,7 +348,8 @@ def test_pack_round_trips_every_dtype_and_shape_exactly():
 
 def test_mjx_one_world_advance_equals_a_step_through_the_host_arrays():
     """`MjxWorlds.advance` (a batch of one, straight between `MjData` and the program) gives the same bits as
-    writing the inputs into the host arrays and calling `step`; and it refuses a batch of more than one."""
+    writing the inputs into the host arrays and calling `step`, with the inputs changed in place between steps and
+    another `MjData` stepped after a while (the views it keeps follow); and it refuses a batch of more than one."""
     pytest.importorskip("mujoco.mjx")
     model = registry.get("struck-stick").spec().compile()
     data = mujoco.MjData(model)
@@ -361,9 +362,15 @@ def test_mjx_one_world_advance_equals_a_step_through_the_host_arrays():
     b.load(np.arange(1), data)
     stepped = mujoco.MjData(model)
     mujoco.mj_copyData(stepped, model, data)
-    for _ in range(3):
+    for i in range(5):
+        stepped.xfrc_applied[-1, 0] = 0.3 + 0.1 * i  # written in place between steps, as an env's action is
+        if i == 3:  # another MjData from here on, as a new episode's: its inputs and state, not the kept views'
+            other = mujoco.MjData(model)
+            mujoco.mj_copyData(other, model, stepped)
+            other.xfrc_applied[-1, 1] = 0.7
+            stepped = other
         a.advance(stepped, 4)
-        b.ctrl[0], b.qfrc_applied[0], b.xfrc_applied[0] = data.ctrl, data.qfrc_applied, data.xfrc_applied
+        b.ctrl[0], b.qfrc_applied[0], b.xfrc_applied[0] = stepped.ctrl, stepped.qfrc_applied, stepped.xfrc_applied
         b.step(4)
         np.testing.assert_array_equal(stepped.qpos, b.qpos[0])
         np.testing.assert_array_equal(stepped.qvel, b.qvel[0])
