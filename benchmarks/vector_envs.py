@@ -2,7 +2,7 @@
 
 For each env, engine and N, three rates in env-steps per second (N copies x vector steps / s), zero actions (the
 textbook problem, whose physics the raw step times; ``--actions random`` gives a new small random action every step,
-as an agent would):
+as an agent would, and the raw step one such action's inputs, held):
 
 * ``raw``: the engine alone stepping N worlds of the env's model ``frame_skip`` steps per call
   (`rigidbench.engines.Worlds.raw_step`: C MuJoCo's `mujoco.batch`, MJX's jitted scan, Warp's captured graph),
@@ -46,14 +46,21 @@ def _rate(step, n: int, seconds: float) -> float:
     return count * n / (time.perf_counter() - start)
 
 
-def raw_worlds(env_id: str, n: int, engine, frame_skip: int | None):
+def raw_worlds(env_id: str, n: int, engine, frame_skip: int | None, actions: str = "zero"):
     """The engine's worlds of the env's model, at its initial state, and their bare step.
 
     The worlds are loaded again from the initial state at the envs' episode length (as the envs' autoresets do), so
     the raw step simulates what an episode simulates: stepping on past it would time another motion (the hard
-    spheres' free flight after the collision costs 7.0 us a step, the episode's contact 10.4 us)."""
+    spheres' free flight after the collision costs 7.0 us a step, the episode's contact 10.4 us).
+
+    With ``actions="random"`` the worlds carry the inputs of one random action of the same size, held: C MuJoCo skips
+    zero applied forces, so a raw step with zero inputs is 2.2-3.0 us (4-5 %) cheaper than the physics the envs'
+    random actions ask for (HeavyTop, StruckStick; 2026-11-26 (h)). MJX's raw call passes its own device zeros,
+    which its program computes with as with any other values."""
     env = gym.make(env_id, frame_skip=frame_skip).unwrapped
     env.reset(seed=0)
+    if actions == "random":
+        env._apply_action(env._checked_action(_action_pool(env.action_space.shape)[1]))
     worlds = engines.worlds(engine, env.model, n)
     ids = np.arange(n)
     worlds.load(ids, env.data)
@@ -71,6 +78,12 @@ def raw_worlds(env_id: str, n: int, engine, frame_skip: int | None):
     return worlds, step
 
 
+def _action_pool(shape: tuple[int, ...]) -> np.ndarray:
+    """16 actions of `shape`, a tenth of the action space, float32 as an agent's (drawn beforehand and cycled, so
+    drawing costs nothing in a timed step)."""
+    return np.random.default_rng(0).uniform(-0.1, 0.1, (16, *shape)).astype(np.float32)
+
+
 def vector_env(env_id: str, n: int, mode: str, frame_skip: int | None, actions: str = "zero", **engine_kwargs):
     kwargs = {} if frame_skip is None else {"frame_skip": frame_skip}
     if mode == "sync":
@@ -81,8 +94,7 @@ def vector_env(env_id: str, n: int, mode: str, frame_skip: int | None, actions: 
     if actions == "zero":
         zero = np.zeros(envs.action_space.shape)
         return envs, lambda: envs.step(zero)
-    # A tenth of the action space, new every step (drawn beforehand and cycled, so drawing costs nothing here).
-    pool = np.random.default_rng(0).uniform(-0.1, 0.1, (16, *envs.action_space.shape)).astype(np.float32)
+    pool = _action_pool(envs.action_space.shape)
     count = [0]
 
     def step():
@@ -123,7 +135,7 @@ def main() -> None:
             for n in args.ns:
                 try:
                     built = {
-                        "raw": raw_worlds(env_id, n, engine, args.frame_skip),
+                        "raw": raw_worlds(env_id, n, engine, args.frame_skip, args.actions),
                         "batched": vector_env(env_id, n, "batched", args.frame_skip, args.actions, **kw),
                     }
                 except engines.EngineRefused as exc:  # a model the engine cannot simulate: say so, go on

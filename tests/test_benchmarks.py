@@ -1,10 +1,14 @@
 """The benchmark script runs end to end (issue 8), so it does not rot: a tiny budget, every section, a record."""
 
+import importlib.util
 import json
 import math
 import pathlib
 import subprocess
 import sys
+
+import numpy as np
+import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SECTIONS = {"env.step", "runner", "cross-section", "cli", "render"}
@@ -64,3 +68,17 @@ def test_vector_env_benchmark_runs_and_records_each_rate(tmp_path):
     (row,) = json.loads(out.read_text())["rows"]
     assert row["n"] == 2 and row["engine"] == "mujoco"
     assert all(row[k] > 0 for k in ("raw", "batched", "sync", "batched_over_raw", "batched_over_sync"))
+
+
+@pytest.mark.parametrize("actions", ["zero", "random"])
+def test_vector_env_benchmarks_raw_step_carries_the_inputs_its_envs_get(actions):
+    """With random actions the raw worlds hold one random action's applied forces (C MuJoCo skips zero ones, so a
+    raw step without them times cheaper physics than the envs'); with zero actions, none."""
+    spec = importlib.util.spec_from_file_location("vector_envs", ROOT / "benchmarks" / "vector_envs.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    worlds, step = module.raw_worlds("rigidbench/StruckStick-v0", 2, None, None, actions)
+    step()
+    applied = np.abs(worlds.xfrc_applied).sum() + np.abs(worlds.qfrc_applied).sum() + np.abs(worlds.ctrl).sum()
+    assert (applied > 0) == (actions == "random")
+    worlds.close()
