@@ -2,7 +2,7 @@
 
 For each env, engine and N, three rates in env-steps per second (N copies x vector steps / s), zero actions (the
 textbook problem, whose physics the raw step times; ``--actions random`` gives a new small random action every step,
-as an agent would, and the raw step one such action's inputs, held):
+as an agent would, and C MuJoCo's raw step one such action's inputs, held):
 
 * ``raw``: the engine alone stepping N worlds of the env's model ``frame_skip`` steps per call
   (`rigidbench.engines.Worlds.raw_step`: C MuJoCo's `mujoco.batch`, MJX's jitted scan, Warp's captured graph),
@@ -55,8 +55,10 @@ def raw_worlds(env_id: str, n: int, engine, frame_skip: int | None, actions: str
 
     With ``actions="random"`` the worlds carry the inputs of one random action of the same size, held: C MuJoCo skips
     zero applied forces, so a raw step with zero inputs is 2.2-3.0 us (4-5 %) cheaper than the physics the envs'
-    random actions ask for (HeavyTop, StruckStick; 2026-11-26 (h)). MJX's raw call passes its own device zeros,
-    which its program computes with as with any other values."""
+    random actions ask for (HeavyTop, StruckStick; 2026-11-26 (h)). C MuJoCo's raw step carries them (its `load`
+    copies the inputs with the state); MJX's raw call passes its own device zeros (a traced program computes the same
+    whatever the values) and Warp's launches with the inputs already on its device, zero (its `load` fills only the
+    host arrays)."""
     env = gym.make(env_id, frame_skip=frame_skip).unwrapped
     env.reset(seed=0)
     if actions == "random":

@@ -30,6 +30,11 @@ SHADOW_MAP_MIN = 1024
 DEVIATION_CAP = 10.0
 
 
+def capped_reward(deviation: float) -> float:
+    """A step's reward for its `deviation`: ``-min(deviation, DEVIATION_CAP)`` (NaN counts as the cap)."""
+    return -deviation if deviation <= DEVIATION_CAP else -DEVIATION_CAP
+
+
 class ScenarioEnv(gym.Env):
     """Base class of the validation environments (zero action = the textbook problem).
 
@@ -505,7 +510,7 @@ class ScenarioEnv(gym.Env):
             "measured": measured_dict,
             "predicted": predicted_dict,
             "deviation": deviation,
-            "reward_deviation": -deviation if deviation <= DEVIATION_CAP else -DEVIATION_CAP,
+            "reward_deviation": capped_reward(deviation),
             "diverged": False,
         }
 

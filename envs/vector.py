@@ -28,7 +28,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from rigidbench import engines
-from rigidbench.envs.base import DEVIATION_CAP, ScenarioEnv
+from rigidbench.envs.base import DEVIATION_CAP, ScenarioEnv, capped_reward
 
 
 class VectorScenarioEnv(gym.vector.VectorEnv):
@@ -75,6 +75,12 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         if env_kwargs.get("render_mode") is not None:
             raise ValueError("render_mode: a batched vector env does not render (render one copy with gymnasium.make)")
         env_kwargs.pop("render_mode", None)
+        if env_cls.step is not ScenarioEnv.step:  # a control task (`TaskEnv`): its own step, reward and outcome
+            raise TypeError(
+                f"{env_cls.__name__} has its own step(): a batched vector env steps and scores a validation env's "
+                "physics itself (`ScenarioEnv._physics_step`, `_score` and their batched hooks); run it under "
+                'gymnasium\'s sync or async vector env (vectorization_mode="sync")'
+            )
         self.num_envs = int(num_envs)
         self._engine = engines.engine_for(engine, device=device, precision=precision)
         self._nthread = nthread
@@ -182,11 +188,11 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         return obs, reward, terminated, truncated, infos
 
     def _step_one(self, actions):
-        """One copy: the template env's own step (`ScenarioEnv._physics_step` and `_score`: its physics, then the
-        scalar hooks), its outputs as the batch's. A batch of one paid ~40-50 us of array work per step for what the
-        scalar hooks do in a few (docs/engines.md); the numbers are the same (the batch path's equal the single env's
-        bit for bit, `tests/test_vector.py`). The physics is one `mj_step` call for the frame skip on C MuJoCo, the
-        engine's one world on MJX and Warp (`_advance_one`).
+        """One copy: the template env's step, in its two halves (`ScenarioEnv._physics_step` and `_score`: its
+        physics, then the scalar hooks), its outputs as the batch's. A batch of one paid ~40-50 us of array work per
+        step for what the scalar hooks do in a few (docs/engines.md); the numbers are the same (the batch path's equal
+        the single env's bit for bit, `tests/test_vector.py`). The physics is one `mj_step` call for the frame skip on
+        C MuJoCo, the engine's one world on MJX and Warp (`_advance_one`).
 
         The step's numbers go into one float64 array, and the reward and each number of ``info`` is a one-element
         view of it: 0.1 us a view against 0.4 us a new array, ~6 us a step of StruckStick's 14 us of Python
@@ -206,7 +212,7 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
             self._autoreset[0] = True
             return obs[None], np.array([reward]), np.array([terminated]), np.array([truncated]), _one(info)
         measured, predicted, deviation = env._score(obs, k, time)
-        reward = -deviation if deviation <= DEVIATION_CAP else -DEVIATION_CAP
+        reward = capped_reward(deviation)
         v = np.array((time, *measured, *predicted, deviation, reward, reward))
         truncated = time >= env._end
         self._autoreset[0] = truncated

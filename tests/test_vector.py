@@ -155,6 +155,12 @@ def test_control_tasks_have_no_batched_vector_env():
     """The tasks draw targets and simulate baselines per copy: gymnasium's sync and async vector envs run them."""
     with pytest.raises(gym.error.Error, match="vector entry point"):
         gym.make_vec("rigidbench/CueShot-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    # Built directly, the batched env refuses a class with its own step() by name, for one copy as for several.
+    from rigidbench.envs.vector import VectorScenarioEnv
+
+    for n in (1, 2):
+        with pytest.raises(TypeError, match="CueShot.* has its own step"):
+            VectorScenarioEnv(env_classes()["rigidbench/CueShot-v0"], n)
 
 
 def test_batched_hooks_equal_the_per_copy_fallbacks():
