@@ -25,6 +25,7 @@ import json
 import math
 import os
 import platform
+import sys
 import time
 
 import gymnasium as gym
@@ -32,7 +33,7 @@ import mujoco
 import numpy as np
 
 import rigidbench  # noqa: F401  (registers the envs)
-from rigidbench import engines
+from rigidbench import engines, outputs
 
 ENVS = ("HeavyTop-v0", "SimplePendulum-v0", "StruckStick-v0", "HardSpheres-v0")
 
@@ -120,6 +121,8 @@ def main() -> None:
     parser.add_argument("--actions", choices=("zero", "random"), default="zero")
     parser.add_argument("--json", default=None)
     args = parser.parse_args()
+    if args.json:
+        outputs.check(args.json, "--json")  # before anything is measured
     print(
         f"mujoco {mujoco.__version__}, {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs "
         f"(load {os.getloadavg()[0]:.1f}); medians of {args.rounds} alternating rounds of {args.seconds:g} s"
@@ -169,10 +172,15 @@ def main() -> None:
                     f"{row['batched_over_raw']:6.2f} {sync:8.0f} {row['batched_over_sync']:6.2f}",
                     flush=True,
                 )
-                if args.json:  # after every row: a run cut short keeps what it measured
-                    with open(args.json, "w") as fh:
-                        json.dump({"mujoco": mujoco.__version__, "cpus": os.cpu_count(), "rows": rows}, fh, indent=1)
+                if args.json:  # after every row, atomically: a run cut short keeps the rows it measured, whole
+                    record = {"mujoco": mujoco.__version__, "cpus": os.cpu_count(), "rows": rows}
+                    outputs.write(args.json, json.dumps(record, indent=1), "--json")
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except outputs.OutputError as exc:
+        sys.exit(f"vector_envs.py: {exc}")
+    except KeyboardInterrupt:  # --json holds the rows finished before it, whole
+        sys.exit("vector_envs.py: interrupted")

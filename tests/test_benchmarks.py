@@ -82,3 +82,15 @@ def test_vector_env_benchmarks_raw_step_carries_the_inputs_its_envs_get(actions)
     applied = np.abs(worlds.xfrc_applied).sum() + np.abs(worlds.qfrc_applied).sum() + np.abs(worlds.ctrl).sum()
     assert (applied > 0) == (actions == "random")
     worlds.close()
+
+
+def test_vector_env_benchmark_refuses_a_directory_for_json_before_measuring(tmp_path):
+    """--json naming a directory: one line naming the option, exit 1, before any env is built."""
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "vector_envs.py"), "--envs", "SimplePendulum-v0", "--ns", "2",
+         "--json", str(tmp_path)],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 1
+    assert done.stderr.strip().splitlines() == [f"vector_envs.py: --json {tmp_path} is a directory; give a file name"]
+    assert "raw" not in done.stdout  # nothing measured
