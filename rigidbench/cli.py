@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import signal
 import sys
 import time
@@ -925,6 +926,17 @@ def _raise_interrupted(signum: int, _frame: object) -> None:
     raise interrupt.Interrupted(signum)
 
 
+def _quiet_interrupted(previous, unraisable) -> None:
+    """`sys.unraisablehook` during a command: the handler's exception, raised inside a callback that cannot pass it
+    on (importlib's module-lock weakref callback, JAX's garbage-collection callback), is not printed as "Exception
+    ignored ... Traceback": `_raise_interrupted` noted the signal, and the run loop or `main` raises it again."""
+    from rigidbench.interrupt import Interrupted
+
+    if isinstance(unraisable.exc_value, Interrupted):
+        return
+    previous(unraisable)
+
+
 def _write(args: argparse.Namespace, rows: list[dict], completion) -> None:
     from rigidbench import results
 
@@ -934,14 +946,25 @@ def _write(args: argparse.Namespace, rows: list[dict], completion) -> None:
         results.write_junit(args.junit, rows, completion)
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def main(argv: Sequence[str] | None = None, *, last: bool = False) -> int:
+    """Run one command; its exit status. `last`: the process ends after it (`entry`), so SIGINT and SIGTERM are left
+    at the system default afterwards instead of the handlers found on entry: a SIGINT in the interpreter's last
+    moments (atexit callbacks, such as the worker pools' joins) then ends the process with 130 and no output,
+    where Python's own handler would print a KeyboardInterrupt traceback. The run's files are whole by then."""
     # Signals first: from here on SIGINT/SIGTERM end the command with one line and 130/143, planning included.
     from rigidbench import interrupt
 
     interrupt.clear()
     handlers = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
+    unraisable_hook = sys.unraisablehook
+    sys.unraisablehook = functools.partial(_quiet_interrupted, unraisable_hook)
     try:
-        return _main(argv)
+        status = _main(argv)
+        signum = interrupt.pending()
+        if signum is not None and status not in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+            # swallowed where it landed (a weakref callback) in a command that never asks again: still 130/143
+            raise interrupt.Interrupted(signum)
+        return status
     except BaseException as exc:  # noqa: BLE001 - sorted below: everything a user can cause is one line
         from rigidbench.interrupt import Interrupted
 
@@ -956,7 +979,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         raise
     finally:
         for sig, handler in handlers.items():
-            signal.signal(sig, handler)
+            signal.signal(sig, signal.SIG_DFL if last else handler)
+        sys.unraisablehook = unraisable_hook
         interrupt.clear()  # a later command (or runner call) in this process starts uninterrupted
 
 
@@ -990,5 +1014,10 @@ def _main(argv: Sequence[str] | None) -> int:
     return commands[args.command](args)
 
 
+def entry() -> None:
+    """The `rigidbench` command and `python -m rigidbench`: the command's status is the process's."""
+    sys.exit(main(last=True))
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()

@@ -28,8 +28,9 @@ def clear() -> None:
 
 def check() -> None:
     """Raise `Interrupted` if a signal arrived whose exception was lost: raised inside a callback that swallows it
-    (JAX's garbage-collection callback, during `import jax`, prints "Exception ignored" and goes on) or wrapped by
-    the code it landed in. The run loop calls it after every case, so such a run stops at the next case."""
+    (JAX's garbage-collection callback during `import jax`, importlib's module-lock weakref callback during any
+    import: Python hands it to `sys.unraisablehook`, which `cli.main` keeps quiet for it) or wrapped by the code it
+    landed in. The run loop calls it after every case, so such a run stops at the next case."""
     if _PENDING:
         raise Interrupted(_PENDING[0])
 

@@ -266,3 +266,27 @@ def test_a_signal_whose_exception_was_swallowed_stops_the_run_at_the_next_case(c
         interrupt.clear()
     assert result.interrupted is not None and result.interrupted.status == 143
     assert len(result.missing) == 2
+
+
+def test_a_sigint_while_the_interpreter_exits_is_status_130_without_a_traceback(tmp_path):
+    """After the command, Python's exit runs atexit callbacks (the worker pools join there). A SIGINT then used to be
+    Python's KeyboardInterrupt, printed with its traceback ("Exception ignored in atexit callback"); `entry` leaves
+    SIGINT at the system default once the command is done, so it ends the process like SIGTERM: 130, no output."""
+    code = (
+        "import atexit, sys, time\n"
+        "atexit.register(lambda: (print('exiting', file=sys.stderr, flush=True), time.sleep(30)))\n"
+        "from rigidbench.cli import entry\n"
+        "sys.argv = ['rigidbench', 'list']\n"
+        "entry()\n"
+    )
+    listing = tmp_path / "list.txt"
+    with listing.open("w") as stdout:  # a file: a pipe this test did not read could fill and stop the command
+        proc = subprocess.Popen(
+            [sys.executable, "-c", code], stdout=stdout, stderr=subprocess.PIPE, text=True, start_new_session=True
+        )
+        assert proc.stderr.readline() == "exiting\n"  # the command is done and the interpreter is exiting
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=20)
+    assert proc.returncode == -signal.SIGINT, err
+    assert err == ""
+    assert "pendulum" in listing.read_text()  # the command's own output was whole
