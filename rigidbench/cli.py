@@ -979,7 +979,8 @@ def main(argv: Sequence[str] | None = None, *, last: bool = False) -> int:
         raise
     finally:
         for sig, handler in handlers.items():
-            signal.signal(sig, signal.SIG_DFL if last else handler)
+            # Python's KeyboardInterrupt handler only: an ignored signal (nohup, a background job) stays ignored
+            signal.signal(sig, signal.SIG_DFL if last and handler is signal.default_int_handler else handler)
         sys.unraisablehook = unraisable_hook
         interrupt.clear()  # a later command (or runner call) in this process starts uninterrupted
 
