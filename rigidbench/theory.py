@@ -1,0 +1,41 @@
+"""The repository's theory page (``docs/theory.md``): the IDs that checks cite, and links to their entries.
+
+Every check and domain names its theory in words that begin with (or contain) an equation ID such as ``O1`` or
+``T4`` (a family letter and a number). Each ID is a heading of ``docs/theory.md`` with an explicit anchor, so a
+result row (its ``theory_ref``), ``rigidbench list`` and the HTML report can point a reader at the closed form,
+its conventions, its domain and its source.
+"""
+
+from __future__ import annotations
+
+import re
+
+# Where the page lives, relative to the repository root (and to the docs of an installed copy's source).
+THEORY_PAGE = "docs/theory.md"
+# The public copy of the repository's docs that links in a report or a printed catalogue point to.
+_ID = re.compile(r"\b([A-Z][0-9]+[a-z]?)\b")
+
+
+def theory_ids(text: str) -> list[str]:
+    """Every equation ID named in a check's or domain's theory text, in order, without repeats."""
+    seen: list[str] = []
+    for found in _ID.findall(text):
+        if found not in seen:
+            seen.append(found)
+    return seen
+
+
+def theory_ref(text: str) -> str:
+    """The first equation ID of a theory text (the entry the prediction comes from), or ``""`` if it names none."""
+    ids = theory_ids(text)
+    return ids[0] if ids else ""
+
+
+def anchor(ref: str) -> str:
+    """The anchor of an ID's heading on the theory page (``"O1"`` -> ``"o1"``)."""
+    return ref.lower()
+
+
+def theory_link(ref: str, page: str = THEORY_PAGE) -> str:
+    """A link to an ID's entry: ``docs/theory.md#o1`` (relative to the repository root by default)."""
+    return f"{page}#{anchor(ref)}" if ref else page
