@@ -20,12 +20,10 @@ import numpy as np
 
 from rigidbench import contact
 from rigidbench.analytic import percussion
+from rigidbench.contract import MAX_ACCELERATION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.hard_spheres import CONTACT_ROUNDOFF_RULE, ContactFloor
 from rigidbench.envs.planar import BlowEnv, PlanarMotion, body_state, free_body_motion, has_nan
 from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import MAX_ACCELERATION, round_step
-from rigidbench.simulate import Trajectory
 
 _COMPLIANCE = (
     "the contact lasts t_c = pi / sqrt(k) = 0.31 ms, during which the stick turns by theta ~ |omega| t_c <~ 2e-3 "

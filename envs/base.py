@@ -17,9 +17,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-from rigidbench import engines, forces
-from rigidbench.scenario import Scenario
-from rigidbench.settings import Settings, profile, read_settings
+from rigidbench.contract import Scenario, harness
 
 _FLOAT64 = np.dtype(np.float64)
 # Smallest shadow map (pixels per side) the envs render with; see `ScenarioEnv.render`.
@@ -87,7 +85,7 @@ class ScenarioEnv(gym.Env):
         height: int = 480,
     ) -> None:
         self.scenario = self.scenario_cls()
-        self._settings = _settings(profile, integrator, timestep)
+        self._settings = harness().settings_for(profile, integrator=integrator, timestep=timestep)
         self.frame_skip = self.default_frame_skip if frame_skip is None else int(frame_skip)
         if self.frame_skip < 1:
             raise ValueError(f"frame_skip = {frame_skip!r} must be an integer >= 1")
@@ -401,7 +399,7 @@ class ScenarioEnv(gym.Env):
         # A copied model is a new MjModel: the forces MuJoCo has no element for (`rigidbench.forces`) must be attached
         # to it as to the original, or the copy steps without them.
         for model in (*([self.model] if "model" in state else []), *state.get("_models", {}).values()):
-            forces.attach(model)
+            harness().attach_forces(model)
         if self._views_ready:
             self._bind_views()  # the copied views are arrays of their own: point them into the copied MjData
 
@@ -442,21 +440,15 @@ class ScenarioEnv(gym.Env):
             if len(self._models) >= 16:
                 self._starts.pop(next(iter(self._models)), None)
                 self._models.pop(next(iter(self._models)))
-            self._models[key] = engines.stored_model(self.scenario.build(resolved, self._settings), self._precision)
+            self._models[key] = harness().env_model(self.scenario, resolved, self._settings, self._precision)
         self._views_ready = False  # the views of the last episode may not fit this model: `_start_views` rebinds
         self.model = self._models[key]
-        forces.attach(self.model)  # cheap and idempotent; a copied env's models are new objects (`__setstate__`)
+        harness().attach_forces(self.model)  # cheap and idempotent; a copied env's models are new objects
         start = self._starts.get(key)
         if start is None:
-            actual = self.scenario.read_params(self.model)
-            data = self.scenario.start(self.model, actual)
-            if self._precision != "float64":
-                data = engines.stored_state(self.model, data, self._precision)
-            prediction = self.scenario.predict(self.model, data)
-            self.scenario.check_precision(self.model, data, prediction, self._engine_name, self._precision)
-            start = (actual, copy.copy(data), prediction, float(self.scenario.duration(prediction)))
-            start += (read_settings(self.model),)
+            start = harness().env_start(self.scenario, self.model, self._precision, self._engine_name)
             self._starts[key] = start
+            data = copy.copy(start[1])
         elif self._data_key == key:  # the last episode's configuration: the MjData it installed, back at the start
             data = self._episode_data  # not `self._data`, which may be a caller's own by now (`rigidbench.suite`)
             mujoco.mj_copyData(data, self.model, start[1])
@@ -558,7 +550,3 @@ def _fps(env_dt: float) -> float | int:
     """Frames per second of real-time playback at `env_dt` simulated seconds per step (an int when whole)."""
     fps = 1.0 / env_dt
     return round(fps) if abs(fps - round(fps)) <= 1e-9 * fps else fps
-
-
-def _settings(profile_name: str, integrator: str | None, timestep: float | None) -> Settings:
-    return profile(profile_name).merged(Settings(integrator=integrator, timestep=timestep))

@@ -34,12 +34,11 @@ import numpy as np
 
 from rigidbench import frames
 from rigidbench.analytic import bent_axle as ba
+from rigidbench.contract import Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.envs.rotor import require_rigid_body_inertia
 from rigidbench.params import BodyInertia, BodyMass, Bound, Numeric, Param, Range, Value
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import round_step
-from rigidbench.simulate import STATE, Trajectory, simulate
+from rigidbench.simulate import STATE, simulate
 
 # Samples per turn of the reference run: the trajectory is exact at any step (theta'' = 0), so the step only sets
 # how densely the turning torque is sampled; 200 a turn (0.031 rad a step) draws it smoothly. Rounded down to one

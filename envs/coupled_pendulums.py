@@ -38,11 +38,10 @@ import mujoco
 import numpy as np
 
 from rigidbench.analytic import oscillations as osc
+from rigidbench.contract import Case, Check, Derived, Domain, Scenario, Trajectory
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, PendulumEnv, RodLength, SpringHeight, SpringStiffness
 from rigidbench.params import Bound, Gravity, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.simulate import Trajectory
 
 _FREQ = (
     "RK4 at dt = 6.30e-3 / omega_a (<= 2 ms in the default cases): relative frequency error (omega dt)^4/120 "

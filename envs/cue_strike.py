@@ -40,6 +40,7 @@ import numpy as np
 
 from rigidbench import contact, frames, pulse, signals
 from rigidbench.analytic import percussion
+from rigidbench.contract import Case, Check, Derived, Domain, Scenario, Trajectory
 from rigidbench.envs.planar import BlowEnv, PlanarMotion, dot, free_body_motion, similar_settings, similar_step
 from rigidbench.params import (
     ActuatorGear,
@@ -52,8 +53,6 @@ from rigidbench.params import (
     ScaledBodyMass,
     SphereRadius,
 )
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.simulate import Trajectory
 
 # Rolling is declared when the slip has fallen to this fraction of its initial value; under B2 that happens at
 # (1 - ROLLED) t_r, which is what is predicted.

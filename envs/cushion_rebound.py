@@ -21,6 +21,7 @@ import numpy as np
 
 from rigidbench import pulse
 from rigidbench.analytic import percussion
+from rigidbench.contract import PER_CHECK, Case, Check, Domain, Trajectory
 from rigidbench.envs.cue_strike import (
     BALL_MASS,
     BALL_RADIUS,
@@ -35,8 +36,6 @@ from rigidbench.envs.cue_strike import (
 )
 from rigidbench.envs.cue_strike import CHECKS as CUE_CHECKS
 from rigidbench.params import Bound, Numeric, Param, Range
-from rigidbench.scenario import PER_CHECK, Case, Check, Domain
-from rigidbench.simulate import Trajectory
 
 _CUE = {c.name: c for c in CUE_CHECKS}
 CHECKS = (

@@ -35,11 +35,10 @@ import mujoco
 import numpy as np
 
 from rigidbench.analytic import oscillations as osc
+from rigidbench.contract import Case, Check, Derived, Scenario, Trajectory
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, PendulumEnv, RodLength
 from rigidbench.params import Bound, Gravity, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Scenario
-from rigidbench.simulate import Trajectory
 
 _FREQ = (
     "RK4 at dt = 1.02e-2 / omega_fast (<= 2 ms in the default cases): relative frequency error (omega dt)^4/120 "

@@ -23,11 +23,10 @@ import numpy as np
 
 from rigidbench import signals
 from rigidbench.analytic import rotating as rot
+from rigidbench.contract import Case, Check, Derived, Scenario, Trajectory
 from rigidbench.envs import rotating
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.params import Bound, Numeric, Param, Range, Value
-from rigidbench.scenario import Case, Check, Derived, Scenario
-from rigidbench.simulate import Trajectory
 
 BALL = "ball"
 # Steps per fall time t0 = sqrt(2h/g) in the reference settings (the crossing's cubic interpolation error is

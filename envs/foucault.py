@@ -26,12 +26,11 @@ import numpy as np
 from rigidbench import signals
 from rigidbench.analytic import oscillations as osc
 from rigidbench.analytic import rotating as rot
+from rigidbench.contract import Case, Check, Derived, Scenario, Trajectory
 from rigidbench.envs import rotating
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.envs.pendulums import RodLength
 from rigidbench.params import Bound, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Scenario
-from rigidbench.simulate import Trajectory
 
 BOB, SWING = "pendulum", "swing"
 # Steps per small-amplitude period T0 = 2 pi sqrt(l/g) in the reference settings: omega0 dt = 2 pi / 200 = 0.031.

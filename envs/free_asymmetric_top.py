@@ -15,6 +15,7 @@ import numpy as np
 
 from rigidbench import signals
 from rigidbench.analytic import tops
+from rigidbench.contract import Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.rotor import (
     FREE_INERTIA,
     MIN_RATE_DOMAIN_TEXT,
@@ -27,9 +28,6 @@ from rigidbench.envs.rotor import (
     set_free_body_rotation,
 )
 from rigidbench.params import BodyInertia, Bound, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import round_step
-from rigidbench.simulate import Trajectory
 
 # Reference timestep (`FreeAsymmetricTop.reference_settings`): the smaller of two limits, as for the symmetric top.
 # - Body frame: omega_B follows sn, cn, dn of s t (THEORY.md A2), whose slopes in tau = s t are at most 1: s h <=

@@ -14,6 +14,7 @@ import numpy as np
 
 from rigidbench import frames, signals
 from rigidbench.analytic import tops
+from rigidbench.contract import Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.rotor import (
     FREE_INERTIA,
     MAX_FREE_STEPS,
@@ -27,9 +28,6 @@ from rigidbench.envs.rotor import (
     set_free_body_rotation,
 )
 from rigidbench.params import BodyInertia, Bound, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import round_step
-from rigidbench.simulate import Trajectory
 
 # Reference timestep (`FreeSymmetricTop.reference_settings`): the smaller of two limits.
 # - Body frame: omega circles e3 at Omega_b = (I3 - I1) omega3 / I1, and RK4's relative error in that rate is

@@ -36,13 +36,11 @@ import numpy as np
 
 from rigidbench import signals
 from rigidbench.analytic import gyrocompass as gc
+from rigidbench.contract import UNRESOLVED_FRACTION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.envs.pendulums import frequency
 from rigidbench.envs.rotor import require_rigid_body_inertia
 from rigidbench.params import BodyInertia, Bound, Numeric, Param, Range, Value
-from rigidbench.scenario import UNRESOLVED_FRACTION, Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import round_step
-from rigidbench.simulate import Trajectory
 
 PLATFORM, GIMBAL, ROTOR = "platform", "gimbal", "rotor"  # body and joint names (models/gyrocompass.xml)
 

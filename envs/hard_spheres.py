@@ -24,11 +24,10 @@ import numpy as np
 
 from rigidbench.analytic import scattering
 from rigidbench.contact import MIN_STEPS, ContactSpring, contact_spring, elastic_contact
+from rigidbench.contract import MAX_ACCELERATION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.pair import FreePairEnv
 from rigidbench.params import BodyMass, Bound, ContactStiffness, GeomSize, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import MAX_ACCELERATION, round_step
-from rigidbench.simulate import Trajectory, final_states, initial_states, simulate
+from rigidbench.simulate import final_states, initial_states, simulate
 
 # Steps of free flight before the spheres touch: the contact begins on a step boundary (the force's kink at
 # zero penetration then falls between RK4 steps instead of inside one).

@@ -20,11 +20,9 @@ import numpy as np
 
 from rigidbench import frames, signals
 from rigidbench.analytic import tops
+from rigidbench.contract import MAX_ACCELERATION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia
 from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Bound, Gravity, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import MAX_ACCELERATION, round_step
-from rigidbench.simulate import Trajectory
 
 # Reference timestep (`HeavyTop.reference_settings`, `reference_run`). MuJoCo integrates the body-frame rates of the
 # ball joint, whose transverse part turns in the body frame as the body spins, and a phase error of RK4 there that

@@ -30,11 +30,9 @@ import numpy as np
 
 from rigidbench import contact, pulse
 from rigidbench.analytic import percussion
+from rigidbench.contract import MAX_ACCELERATION, Case, Check, Derived, Scenario, Trajectory
 from rigidbench.envs.planar import BlowEnv, body_state, free_body_motion, require_strike_on_stick, similar_settings
 from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition, positive
-from rigidbench.scenario import Case, Check, Derived, Scenario
-from rigidbench.settings import MAX_ACCELERATION
-from rigidbench.simulate import Trajectory
 
 _C_HIT = (
     "C is hit ~0.1 ms after the blow, when the stick has turned by ~1e-3 rad: face tilt and contact-point "

@@ -16,11 +16,10 @@ import numpy as np
 
 from rigidbench import signals
 from rigidbench.analytic import oscillations as osc
+from rigidbench.contract import Case, Check, Derived, Scenario, Trajectory
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import PendulumEnv, RodLength
 from rigidbench.params import Gravity, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Scenario
-from rigidbench.simulate import Trajectory
 
 _RK4 = (
     "RK4 at dt = 6.26e-3 / omega_max (2 ms at the defaults; omega_max = sqrt(g/l) max(1, 2 sin(a/2)), the bob's "

@@ -32,11 +32,10 @@ import mujoco
 import numpy as np
 
 from rigidbench.analytic import oscillations as osc
+from rigidbench.contract import Case, Check, Derived, Domain, Params, Scenario, Trajectory
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, ChainSize, PendulumEnv, RodLength, SpringHeight, SpringStiffness
 from rigidbench.params import Bound, Gravity, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Domain, Params, Scenario
-from rigidbench.simulate import Trajectory
 
 MAX_PENDULUMS = 40
 

@@ -25,9 +25,9 @@ import mujoco
 import numpy as np
 
 from rigidbench import signals
+from rigidbench.contract import Derived
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.params import Value
-from rigidbench.scenario import Derived
 
 # The energy check shared by the spring-coupled pendulums (coupled pair and chain): RK4 at their 2 ms step.
 SPRING_CHAIN_ENERGY_REASON = (

@@ -26,10 +26,9 @@ import numpy as np
 
 from rigidbench import pulse
 from rigidbench.analytic import percussion
+from rigidbench.contract import Case, Check, Derived, Domain, Scenario, Trajectory
 from rigidbench.envs.planar import BlowEnv, free_body_motion, max_impulse, reference_pulse, wrap_angle
 from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.simulate import Trajectory
 
 _PIN = (
     "pulse tau = 1.2e-3 / |omega| rounded down and pin time constant tc = 2 tau (reference settings: 0.1 ms and "

@@ -21,10 +21,8 @@ import mujoco
 import numpy as np
 
 from rigidbench import frames, pulse
+from rigidbench.contract import MAX_ACCELERATION, Derived, Trajectory, round_step
 from rigidbench.envs.base import ScenarioEnv
-from rigidbench.scenario import Derived
-from rigidbench.settings import MAX_ACCELERATION, round_step
-from rigidbench.simulate import Trajectory
 
 
 @dataclass(frozen=True)

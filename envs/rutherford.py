@@ -31,10 +31,10 @@ import numpy as np
 
 from rigidbench import forces, signals
 from rigidbench.analytic import coulomb, scattering
+from rigidbench.contract import Case, Check, Derived, Domain, Scenario
 from rigidbench.envs.cross_section import BEAM_SEED, MIN_EXPECTED, bin_counts, chi_square_pvalue
 from rigidbench.envs.pair import FreePairEnv
 from rigidbench.params import BodyMass, Bound, Numeric, Param, Range
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
 from rigidbench.simulate import final_states, get_state, simulate
 
 # RK4 steps per passage time r_min / v of the pair that comes closest (the derived timestep). Measured (equal

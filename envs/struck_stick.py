@@ -20,10 +20,9 @@ import numpy as np
 
 from rigidbench import pulse, signals
 from rigidbench.analytic import percussion
+from rigidbench.contract import Case, Check, Derived, Scenario, Trajectory
 from rigidbench.envs.planar import BlowEnv, free_body_motion, max_impulse, reference_pulse
 from rigidbench.params import Bound, Numeric, Param, Range, RodLength, ScaledBodyMass, SitePosition
-from rigidbench.scenario import Case, Check, Derived, Scenario
-from rigidbench.simulate import Trajectory
 
 # The pulse: the force is fixed along world x (refsite), so the linear impulse is exact; it acts at a material
 # point that turns by theta(t) <= omega tau / 2 during the pulse, so the torque is -F h cos(theta): relative error

@@ -24,11 +24,9 @@ import numpy as np
 
 from rigidbench import forces, signals
 from rigidbench.analytic import orbits
+from rigidbench.contract import Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.pair import FreePairEnv
 from rigidbench.params import Numeric, Param, Range, ScaledBodyMass, Value
-from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
-from rigidbench.settings import round_step
-from rigidbench.simulate import Trajectory
 
 # Reference timestep (`TwoBodyOrbit.reference_settings`), a fixed fraction of the fastest time scale:
 # - kepler: the pericentre passage t_p = r_p / v_p. KEPLER_STEP = 0.01: RK4's orbit error is ~3.5e-9 a over three

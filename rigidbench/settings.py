@@ -31,6 +31,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from rigidbench.contract import MAX_ACCELERATION, round_step  # noqa: F401 (their old home; defined with the contract)
+
 
 def _enum(prefix: str, enum: type, names: dict[str, str]) -> dict[str, int]:
     """Public name -> MuJoCo enum value, for the members this MuJoCo has."""
@@ -58,26 +60,11 @@ MUJOCO_DEFAULT_TIMESTEP = 0.002
 # Samples in the thorough profile: a goodness-of-fit test with ~20 bins then resolves bin probabilities to ~1 %.
 THOROUGH_SAMPLES = 100_000
 
-# MuJoCo flags a joint acceleration (qacc) above mjMAXVAL = 1e10 as a divergence and resets the state ("Nan, Inf or
-# huge value in QACC"): an engine limit, not the theory's. Scenarios keep every acceleration of their motion (a blow's
-# pulse, a contact's peak deceleration, a top's gyroscopic acceleration) below a tenth of it.
-MAX_ACCELERATION = 1e9
 
 # Largest timestep accepted (s), to catch a typo: MuJoCo accepts anything. Reference timesteps follow the parameters
 # (`Scenario.reference_settings`), and the slowest the ranges allow, a 100 m pendulum at g = 1e-6 m/s^2 (period
 # 17 h), steps 60 s; 1000 s leaves a sweep's ladder room above that.
 MAX_TIMESTEP = 1000.0
-
-
-def round_step(h: float) -> float:
-    """A derived timestep rounded down to one significant digit (1, 2, ..., 9 times a power of ten, s).
-
-    Never larger than the rule's value, so its error bounds hold, and at most a factor 2 smaller. A step that stays
-    the same over a range of parameters is readable, reproducible from its printed value, and equal to the model
-    file's step at every default case (each rule is calibrated a hair above it there).
-    """
-    e = math.floor(math.log10(h))
-    return float(f"{math.floor(h / 10.0**e * (1 + 1e-12))}e{e}")
 
 
 # Name of the model's custom text holding the settings that followed the parameters (`Scenario.reference_settings`),

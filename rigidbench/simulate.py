@@ -11,68 +11,17 @@ from __future__ import annotations
 import os
 import statistics
 import time as _time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 from mujoco import rollout
 
-STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+from rigidbench.trajectory import MAX_STEPS, STATE, Trajectory, steps_for  # noqa: F401 (their old home)
 
-# The longest run accepted (steps): 2e7 states of a small model is ~1.5 GB; longer runs are a mistake.
-MAX_STEPS = 20_000_000
 # The most memory one recorded trajectory may take (bytes): every state of the run is kept (`simulate`), so a run
 # of n steps of a model with s state numbers needs 8 (n + 1) s bytes. Two cases run at once on two cores.
 MAX_TRAJECTORY_BYTES = 2 * 1024**3
-
-
-@dataclass(frozen=True)
-class Trajectory:
-    """States at every step, the initial state included.
-
-    Attributes
-    ----------
-    time : ndarray, shape (n + 1,)
-        Seconds.
-    qpos : ndarray, shape (n + 1, nq)
-    qvel : ndarray, shape (n + 1, nv)
-        For free and ball joints, angular velocity in the body frame.
-    diverged_at : float or None
-        Simulated time (s) of the last good sample before the state stopped being finite or MuJoCo reset it;
-        None if the run stayed sane.
-    states : ndarray, shape (n + 1, nstate), optional
-        The full-physics states (`STATE`) the other fields are views of: what restarts the run exactly from any
-        sample (`time_stepping`).
-    """
-
-    time: np.ndarray
-    qpos: np.ndarray
-    qvel: np.ndarray
-    diverged_at: float | None
-    states: np.ndarray | None = field(default=None, repr=False)
-
-    @property
-    def timestep(self) -> float:
-        return float(self.time[1] - self.time[0])
-
-
-def steps_for(duration: float, timestep: float) -> int:
-    """Whole number of steps covering `duration` (``while d.time < T`` would take one step too many).
-
-    Raises
-    ------
-    ValueError
-        If the run would be shorter than one step or longer than `MAX_STEPS`.
-    """
-    n = round(duration / timestep)
-    if n < 1:
-        raise ValueError(f"duration {duration:g} s is shorter than one timestep ({timestep:g} s)")
-    if n > MAX_STEPS:
-        raise ValueError(
-            f"duration {duration:g} s at timestep {timestep:g} s needs {n} steps, more than {MAX_STEPS}; "
-            "use a larger timestep or parameters with shorter time scales"
-        )
-    return n
 
 
 def check_run_size(model: mujoco.MjModel, nstep: int) -> None:
