@@ -63,7 +63,7 @@ def raw_worlds(env_id: str, n: int, engine, frame_skip: int | None, actions: str
     env = gym.make(env_id, frame_skip=frame_skip).unwrapped
     env.reset(seed=0)
     if actions == "random":
-        env._apply_action(env._checked_action(_action_pool(env.action_space.shape)[1]))
+        env.apply_action(env._checked_action(_action_pool(env.action_space.shape)[1]))
     worlds = engines.worlds(engine, env.model, n)
     ids = np.arange(n)
     worlds.load(ids, env.data)

@@ -368,7 +368,7 @@ class BallStickEnv(BlowEnv):
 
     observables = ("v_x", "omega_z")
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         stick = self.prediction["_theory"].stick
         t = np.asarray(t)
         hit = self.prediction["_t_hit"]
@@ -377,25 +377,25 @@ class BallStickEnv(BlowEnv):
         out[(t > hit) & (t < hit + self.prediction["_t_contact"])] = np.nan  # inside the contact: not scored
         return out
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         stick = self.prediction["_theory"].stick  # the deviation's scales, read every step: cached per episode
         self._v_scale, self._omega_scale = stick.com_velocity, abs(stick.angular_velocity)
 
-    def _measure(self, obs: np.ndarray) -> list[float]:
+    def measured(self, obs: np.ndarray) -> list[float]:
         _, _, _, v_x, _, omega_z = obs.tolist()
         return [v_x, omega_z]
 
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+    def deviation(self, measured: list[float], predicted: list[float]) -> float:
         if has_nan(predicted):
             return 0.0
         (v_x, omega_z), (v_x_theory, omega_z_theory) = measured, predicted
         return abs(v_x - v_x_theory) / self._v_scale + abs(omega_z - omega_z_theory) / self._omega_scale
 
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
+    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
         return obs[:, [3, 5]]
 
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
         (v_x, omega_z), (v_x_theory, omega_z_theory) = measured.T, predicted.T
         deviation = np.abs(v_x - v_x_theory) / self._v_scale + np.abs(omega_z - omega_z_theory) / self._omega_scale
         return np.where(np.isnan(predicted).any(axis=1), 0.0, deviation)

@@ -2,7 +2,11 @@
 
 A scenario env is a thin view of its `Scenario` (house rule 11): the scenario resolves parameters, builds the
 model, sets the initial state and predicts; the env steps MuJoCo, applies the action, and scores the state
-against the theory at every step. A subclass sets `scenario_cls` and implements four small hooks.
+against the theory at every step. A subclass sets `scenario_cls` and `observables` and implements the hooks
+under "hooks" below, each public and documented: `define_observation_space`, `define_action_space`, `observe`,
+`apply_action`, `theory`, `measured`, `deviation` (and, where it needs them, `begin_episode`, `load` and
+`bind_views`). Everything else here is plumbing a subclass does not touch. Model building, starting and
+predicting are the harness's (`rigidbench.harness`, reached through `rigidbench.contract.harness`).
 """
 
 from __future__ import annotations
@@ -98,18 +102,18 @@ class ScenarioEnv(gym.Env):
         self._resolved: dict[tuple, dict[str, Any]] = {}  # per case and user parameters: `Scenario.resolve`'s values
         self._resolve(self._case_name, self._params)  # fail now, not at reset (and kept for the first reset)
         self._models: dict[tuple, mujoco.MjModel] = {}
-        self._starts: dict[tuple, tuple] = {}  # per model: its episode's start (`_load`)
+        self._starts: dict[tuple, tuple] = {}  # per model: its episode's start (`load`)
         self._data_key: tuple | None = None  # the configuration the last reset installed `_episode_data` for
         self._episode_data: mujoco.MjData | None = None
         self._renderer: mujoco.Renderer | None = None
-        self._load(self._case_name, self._params)
-        self.observation_space = self._observation_space()
+        self.load(self._case_name, self._params)
+        self.observation_space = self.define_observation_space()
         if len(self.observation_space.shape) != 1:
             raise TypeError(f"{type(self).__name__}: observations must be 1-D, not {self.observation_space.shape}")
         # The action an agent sends is normalised, float32 in [-1, 1] per component (gymnasium's MuJoCo envs and
         # SB3's convention, issue 17); the env's physical action (SI) is that times `action_scale`, the bound
-        # `_action_space` states in SI units. The hooks see the physical action only.
-        physical = self._action_space()
+        # `define_action_space` states in SI units. The hooks see the physical action only.
+        physical = self.define_action_space()
         if not np.array_equal(physical.low, -physical.high) or not np.all(physical.high > 0):
             raise TypeError(
                 f"{type(self).__name__}: the physical action bounds must be symmetric, +-high with high > 0"
@@ -134,11 +138,11 @@ class ScenarioEnv(gym.Env):
     @property
     def data(self) -> mujoco.MjData:
         """The MjData being stepped. Assigning another one (a new episode, `ClosedLoopTask`'s scratch rollout, the
-        dm_control view) rebinds the views a step reads and writes (`_bind_views`), so no hook has to check.
+        dm_control view) rebinds the views a step reads and writes (`bind_views`), so no hook has to check.
         Per-step code may read `self._data` directly: the same object, without the property's ~40 ns.
 
         A reset of the configuration the env ran last puts the start back into the MjData that configuration's last
-        reset installed (`_load`): copy an episode's final state (``copy.copy(env.data)``) to keep it past a reset.
+        reset installed (`load`): copy an episode's final state (``copy.copy(env.data)``) to keep it past a reset.
         An MjData assigned from outside is never written by a reset."""
         return self._data
 
@@ -146,51 +150,58 @@ class ScenarioEnv(gym.Env):
     def data(self, data: mujoco.MjData) -> None:
         self._data = data
         if self._views_ready:
-            self._bind_views()
+            self.bind_views()
 
-    def _bind_views(self) -> None:
+    def bind_views(self) -> None:
         """Build the views into `self.data` that a step reads or writes (none by default; numpy views save the
         ~0.2 us of slicing a MuJoCo array afresh every step)."""
 
-    def _start_views(self) -> None:
-        """Bind the views for a new episode: a subclass calls it at the end of its `_load`, once it has cached
-        what `_bind_views` needs (addresses and ids of the compiled model)."""
+    def start_views(self) -> None:
+        """Bind the views for a new episode: a subclass calls it at the end of its `load`, once it has cached
+        what `bind_views` needs (addresses and ids of the compiled model)."""
         self._views_ready = True
-        self._bind_views()
+        self.bind_views()
 
     # ---- hooks -------------------------------------------------------------------------------------------
 
     # Names of the observables compared with theory every step (keys of info["measured"] / info["predicted"]).
     observables: ClassVar[tuple[str, ...]]
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
+        """The observation space: a 1-D Box, its components and units listed in the env's docstring. Called once,
+        by the constructor, after the first `load`."""
         raise NotImplementedError
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
+        """The physical action's bounds in SI units, symmetric (``-high .. high``). The agent sees a normalised
+        float32 Box(-1, 1); `apply_action` receives the physical action (normalised action times ``high``)."""
         raise NotImplementedError
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
+        """The observation of the current state ``self.data`` (float64, shape of the observation space)."""
         raise NotImplementedError
 
-    def _apply_action(self, action: np.ndarray) -> None:
+    def apply_action(self, action: np.ndarray) -> None:
+        """Write the physical action (SI, clipped to the bounds) into ``self.data`` (ctrl, qfrc_applied or
+        xfrc_applied) before the frame skip's steps. Zero action must be the textbook problem."""
         raise NotImplementedError
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         """The observables predicted by theory (zero action) at times `t` (s), shape (len(t), len(observables)).
         Tabulated once per episode on the env's time grid; a step looks its row up as a list of floats."""
         raise NotImplementedError
 
-    def _measure(self, obs: np.ndarray):
+    def measured(self, obs: np.ndarray):
         """The same observables measured from an observation: an ndarray of shape (len(observables),) or a
         sequence of floats (cheaper per step where the hook computes in Python floats)."""
         raise NotImplementedError
 
-    def _deviation(self, measured, predicted: list[float]) -> float:
-        """Normalised deviation of `measured` (as `_measure` returns it) from the theory's row `predicted`
+    def deviation(self, measured, predicted: list[float]) -> float:
+        """Normalised deviation of `measured` (as `measured` returns it) from the theory's row `predicted`
         (documented per env); the reward is its negative."""
         raise NotImplementedError
 
-    def _begin(self) -> None:
+    def begin_episode(self) -> None:
         """Advance the fresh episode before its first observation (e.g. deliver a blow); nothing by default.
 
         Called by ``reset`` after the initial state is set and before the theory is tabulated from
@@ -203,17 +214,17 @@ class ScenarioEnv(gym.Env):
     # inputs), so every env works batched; a family overrides them with array code doing the same arithmetic in the
     # same order, so a batched env equals N single envs bit for bit (tests/test_vector.py).
 
-    def _observations(self, worlds) -> np.ndarray:
+    def observe_batch(self, worlds) -> np.ndarray:
         """Observations of every copy, shape (nworld, obs_dim), from ``worlds.qpos``, ``worlds.qvel``,
         ``worlds.time`` (`rigidbench.engines.Worlds`)."""
         out = np.empty((worlds.nworld, *self.observation_space.shape))
         with self._scratch() as data:
             for i in range(worlds.nworld):
                 data.qpos[:], data.qvel[:], data.time = worlds.qpos[i], worlds.qvel[i], worlds.time[i]
-                out[i] = self._observation()
+                out[i] = self.observe()
         return out
 
-    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+    def apply_actions(self, actions: np.ndarray, worlds) -> None:
         """Write every copy's (clipped) action, shape (nworld, *action_shape), into ``worlds.ctrl``,
         ``worlds.qfrc_applied`` or ``worlds.xfrc_applied``."""
         with self._scratch() as data:
@@ -223,20 +234,20 @@ class ScenarioEnv(gym.Env):
                     worlds.qfrc_applied[i],
                     worlds.xfrc_applied[i],
                 )
-                self._apply_action(actions[i])
+                self.apply_action(actions[i])
                 worlds.ctrl[i], worlds.qfrc_applied[i], worlds.xfrc_applied[i] = (
                     data.ctrl,
                     data.qfrc_applied,
                     data.xfrc_applied,
                 )
 
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
-        """`_measure` of every row of `obs`, shape (nworld, len(observables))."""
-        return np.array([np.asarray(self._measure(row), dtype=float) for row in obs]).reshape(len(obs), -1)
+    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
+        """`measured` of every row of `obs`, shape (nworld, len(observables))."""
+        return np.array([np.asarray(self.measured(row), dtype=float) for row in obs]).reshape(len(obs), -1)
 
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        """`_deviation` of every copy, shape (nworld,), from (nworld, len(observables)) arrays."""
-        return np.array([self._deviation(m, p) for m, p in zip(measured.tolist(), predicted.tolist(), strict=True)])
+    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        """`deviation` of every copy, shape (nworld,), from (nworld, len(observables)) arrays."""
+        return np.array([self.deviation(m, p) for m, p in zip(measured.tolist(), predicted.tolist(), strict=True)])
 
     @contextlib.contextmanager
     def _scratch(self):
@@ -262,8 +273,8 @@ class ScenarioEnv(gym.Env):
             raise ValueError(f"unknown reset option(s) {sorted(unknown)}; valid: 'case', 'params'")
         case = self.scenario.case(options.get("case", self._case_name)).name
         params = {**self._params, **dict(options.get("params") or {})}
-        self._load(case, params)
-        obs = self._observation()
+        self.load(case, params)
+        obs = self.observe()
         info = self._step_info(obs, 0)
         info.update(case=self._case, params=dict(self._actual), settings=dict(self._settings_record))
         return obs, info
@@ -279,12 +290,12 @@ class ScenarioEnv(gym.Env):
         """The physics half of `step`, shared with a batched vector env of one (`VectorScenarioEnv`): the action
         applied, the frame skip's steps taken; the observation, step count, time, and whether the step is sound."""
         # Every line here runs once per step (issue 8): look-ups that are not free (model.opt, data.time, the
-        # observable names, the episode's end) are cached by `_load` or read once, and each hook is called once.
-        self._apply_action(self._checked_action(action))
+        # observable names, the episode's end) are cached by `load` or read once, and each hook is called once.
+        self.apply_action(self._checked_action(action))
         data = self._data
         self._advance(data)
         k = self._k = self._k + 1
-        obs = self._observation()
+        obs = self.observe()
         time = data.time
         # `_diverged`, inlined: time fell behind (MuJoCo reset a blown-up state) or the observation is not finite.
         return obs, k, time, not time < self._behind + k * self._env_dt and math.isfinite(sum(obs.tolist()))  # 1-D obs
@@ -306,7 +317,7 @@ class ScenarioEnv(gym.Env):
         info = {
             "time": float(time),
             "measured": dict.fromkeys(names, math.nan),
-            "predicted": dict(zip(names, predicted)),  # noqa: B905 (checked in `_load`)
+            "predicted": dict(zip(names, predicted)),  # noqa: B905 (checked in `load`)
             "deviation": math.inf,
             "reward_deviation": reward,
             "diverged": True,
@@ -401,7 +412,7 @@ class ScenarioEnv(gym.Env):
         for model in (*([self.model] if "model" in state else []), *state.get("_models", {}).values()):
             harness().attach_forces(model)
         if self._views_ready:
-            self._bind_views()  # the copied views are arrays of their own: point them into the copied MjData
+            self.bind_views()  # the copied views are arrays of their own: point them into the copied MjData
 
     # ---- internals --------------------------------------------------------------------------------------
 
@@ -428,10 +439,16 @@ class ScenarioEnv(gym.Env):
     @property
     def prediction(self) -> Mapping[str, Any]:
         """The theory's prediction for the current configuration, computed once and shared by every episode of it
-        (`_load`): read it, do not change it."""
+        (`load`): read it, do not change it."""
         return self._prediction
 
-    def _load(self, case: str, params: Mapping[str, Any]) -> None:
+    def load(self, case: str, params: Mapping[str, Any]) -> None:
+        """Install case `case` with the user's `params` for a new episode: its model (built once per configuration
+        and kept), its initial state, prediction and theory table, then `begin_episode`.
+
+        A subclass that caches what its per-step hooks need (ids and addresses in the compiled model) overrides it:
+        ``super().load(case, params)``, then its caching, then ``self.start_views()``.
+        """
         resolved = self._resolve(case, params)
         # The precision is part of the key: a batched vector env on a float32 engine sets its template's after the
         # template's constructor has loaded (and kept) the float64 model of the same parameters.
@@ -441,7 +458,7 @@ class ScenarioEnv(gym.Env):
                 self._starts.pop(next(iter(self._models)), None)
                 self._models.pop(next(iter(self._models)))
             self._models[key] = harness().env_model(self.scenario, resolved, self._settings, self._precision)
-        self._views_ready = False  # the views of the last episode may not fit this model: `_start_views` rebinds
+        self._views_ready = False  # the views of the last episode may not fit this model: `start_views` rebinds
         self.model = self._models[key]
         harness().attach_forces(self.model)  # cheap and idempotent; a copied env's models are new objects
         start = self._starts.get(key)
@@ -466,7 +483,7 @@ class ScenarioEnv(gym.Env):
         self.data = data
         self._observable_names = tuple(self.observables)  # may be a property of the model: read once, not per step
         self._case = case
-        self._begin()
+        self.begin_episode()
         # Theory on the env's time grid, evaluated once (vectorised) so a step costs a table lookup.
         self._env_dt = env_dt = self.model.opt.timestep * self.frame_skip
         self.metadata = {**type(self).metadata, "render_fps": _fps(env_dt)}
@@ -474,7 +491,7 @@ class ScenarioEnv(gym.Env):
         self._behind = self._time0 - 0.5 * env_dt  # step k has fallen behind (diverged) before time _behind + k env_dt
         n = int(np.ceil(self.episode_duration / env_dt)) + 2
         self._k = 0
-        table = self._theory(self._time0 + env_dt * np.arange(n))
+        table = self.theory(self._time0 + env_dt * np.arange(n))
         if table.shape[1:] != (len(self._observable_names),):
             raise ValueError(
                 f"{type(self).__name__}: the theory gives {table.shape[1:]} values a step for the "
@@ -496,7 +513,7 @@ class ScenarioEnv(gym.Env):
             measured_dict, predicted_dict = {name: measured_values[0]}, {name: predicted[0]}
         else:
             measured_dict = dict(zip(names, measured_values))  # noqa: B905 (lengths checked at reset)
-            predicted_dict = dict(zip(names, predicted))  # noqa: B905 (checked in `_load`)
+            predicted_dict = dict(zip(names, predicted))  # noqa: B905 (checked in `load`)
         return {
             "time": time,
             "measured": measured_dict,
@@ -509,24 +526,24 @@ class ScenarioEnv(gym.Env):
     def _score(self, obs: np.ndarray, k: int, time: float) -> tuple[list[float], list[float], float]:
         """Step `k`'s measured and predicted observables (Python floats, in `_observable_names`' order) and the
         deviation between them (`_step_info`'s numbers, before any dict is built)."""
-        predicted = self._rows[k] if k < self._table_len else self._theory(np.array([time]))[0].tolist()
-        measured = self._measure(obs)
-        deviation = self._deviation(measured, predicted)
+        predicted = self._rows[k] if k < self._table_len else self.theory(np.array([time]))[0].tolist()
+        measured = self.measured(obs)
+        deviation = self.deviation(measured, predicted)
         # The hook returns an ndarray or Python floats, one per observable: checked at reset (k = 0), trusted after.
         measured_values = measured.tolist() if type(measured) is np.ndarray else measured
         if not k and (not _all_floats(measured_values) or len(measured_values) != len(self._observable_names)):
             names = self._observable_names
             raise TypeError(
-                f"{type(self).__name__}._measure returned {measured!r}: an ndarray or a sequence of Python floats, "
+                f"{type(self).__name__}.measured returned {measured!r}: an ndarray or a sequence of Python floats, "
                 f"one for each of the {len(names)} observables {names}, is required"
             )
         return measured_values, predicted, deviation
 
     def _compare(self) -> tuple[float, np.ndarray, np.ndarray]:
         """Deviation, measured and predicted observables at the current state (any time, no table)."""
-        measured = self._measure(self._observation())
-        predicted = self._theory(np.array([self.data.time]))[0]
-        return self._deviation(measured, predicted.tolist()), np.asarray(measured, dtype=float), predicted
+        measured = self.measured(self.observe())
+        predicted = self.theory(np.array([self.data.time]))[0]
+        return self.deviation(measured, predicted.tolist()), np.asarray(measured, dtype=float), predicted
 
     def _diverged(self, obs: np.ndarray) -> bool:
         """MuJoCo resets a blown-up state (bad qpos, qvel or qacc): time jumps back to ~0, and NaN never

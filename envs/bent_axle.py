@@ -614,54 +614,54 @@ class BentAxleEnv(ScenarioEnv):
     observables = ("torque_x", "torque_y", "torque_z", "force_x", "force_y", "force_z")
     max_torque: ClassVar[float] = 0.01
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(8,), dtype=np.float64)
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_torque, self.max_torque, shape=(1,), dtype=np.float64)
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         self._torque = sensor_slice(self.model, "bearing-torque")
         self._force = sensor_slice(self.model, "bearing-force")
         axle = self.prediction["_theory"]
         self._scales = (axle.torque_scale, axle.force_scale)
-        self._start_views()
+        self.start_views()
 
-    def _bind_views(self) -> None:
+    def bind_views(self) -> None:
         self._qfrc = self._data.qfrc_applied
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         data = self._data
         mujoco.mj_forward(self.model, data)  # the sensors at this state (mj_step leaves those of the last stage)
         return np.concatenate(
             [data.qpos[:1], data.qvel[:1], data.sensordata[self._torque], data.sensordata[self._force]]
         )
 
-    def _apply_action(self, action: np.ndarray) -> None:
+    def apply_action(self, action: np.ndarray) -> None:
         self._qfrc[0] = action.item()
 
-    def _observations(self, worlds) -> np.ndarray:
+    def observe_batch(self, worlds) -> np.ndarray:
         # Per copy, with its drive torque too: the sensors include it (the axial torque is I_zz theta'').
         out = np.empty((worlds.nworld, 8))
         with self._scratch() as data:
             for i in range(worlds.nworld):
                 data.qpos[:], data.qvel[:], data.time = worlds.qpos[i], worlds.qvel[i], worlds.time[i]
                 data.qfrc_applied[:] = worlds.qfrc_applied[i]
-                out[i] = self._observation()
+                out[i] = self.observe()
         return out
 
-    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+    def apply_actions(self, actions: np.ndarray, worlds) -> None:
         worlds.qfrc_applied[:, 0] = actions[:, 0]
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         axle = self.prediction["_theory"]
         return np.concatenate([axle.torque_W(t), axle.force_W(t)], axis=1)
 
-    def _measure(self, obs: np.ndarray) -> np.ndarray:
+    def measured(self, obs: np.ndarray) -> np.ndarray:
         angle = obs[0]
         return np.concatenate([ba.rotate_about_axle(obs[2:5], angle), ba.rotate_about_axle(obs[5:8], angle)])
 
-    def _deviation(self, measured, predicted: list[float]) -> float:
+    def deviation(self, measured, predicted: list[float]) -> float:
         d = np.asarray(measured, dtype=float) - np.asarray(predicted, dtype=float)
         return float(max(np.linalg.norm(d[:3]) / self._scales[0], np.linalg.norm(d[3:]) / self._scales[1]))

@@ -481,5 +481,5 @@ class CoupledPendulumsEnv(PendulumEnv):
 
     scenario_cls = CoupledPendulums
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         return self.prediction["_modes"].angles(t, self.prediction["_angles0"])

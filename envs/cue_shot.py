@@ -96,7 +96,7 @@ class CueShotEnv(ShotTask):
         # slip stays 3.4e-7 m/s.
         super().__init__(params={"mu": 0.5, **dict(params or {})}, timestep=timestep, **kwargs)
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float64)
 
     def _target_ranges(self) -> dict[str, tuple[float, float]]:

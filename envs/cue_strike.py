@@ -627,27 +627,27 @@ class CueStrikeEnv(BlowEnv):
     scenario_cls = CueStrike
     body = "ball"
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(6,), dtype=np.float64)
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_force, self.max_force, shape=(2,), dtype=np.float64)
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         # Read every step: cached per episode (a MuJoCo attribute or a mapping look-up costs ~0.1 us each).
         self._radius = float(self.model.geom("ball").size[0])
         self._rest_height = self.prediction["_rest_height"]
         theory = self.prediction["_theory"]
         self._x_scale = max(abs(theory.skid_distance), theory.radius)  # the length scale of the problem
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         # PlanarMotion.omega_W and CueStrike.slip for one state, in Python floats (as BlowEnv._observation).
         (x, _, z, q_w, q_x, q_y, q_z), (v_x, _, v_z, w_x, w_y, w_z) = self._free_joint()
         omega_y = dot(frames.matrix_rows(q_w, q_x, q_y, q_z)[1], (w_x, w_y, w_z))
         return np.array([x, z - self._rest_height, v_x, v_z, omega_y, v_x - self._radius * omega_y])
 
-    def _observations(self, worlds) -> np.ndarray:
+    def observe_batch(self, worlds) -> np.ndarray:
         (x, _, z, q_w, q_x, q_y, q_z), (v_x, _, v_z, w_x, w_y, w_z) = self._free_joints(worlds)
         omega_y = dot(frames.matrix_rows(q_w, q_x, q_y, q_z, sqrt=np.sqrt)[1], (w_x, w_y, w_z))
         return np.stack([x, z - self._rest_height, v_x, v_z, omega_y, v_x - self._radius * omega_y], axis=1)
@@ -658,19 +658,19 @@ class CueStrikeEnv(BlowEnv):
 
     observables = ("x", "v_x", "slip")
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         x, v, u = self.prediction["_theory"].state(t)
         return np.stack([x + self.prediction["_x_offset"], v, u], axis=1)
 
-    def _measure(self, obs: np.ndarray) -> list[float]:
+    def measured(self, obs: np.ndarray) -> list[float]:
         x, _, v_x, _, _, slip = obs.tolist()
         return [x, v_x, slip]
 
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+    def deviation(self, measured: list[float], predicted: list[float]) -> float:
         return abs(measured[0] - predicted[0]) / self._x_scale
 
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
+    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
         return obs[:, [0, 2, 5]]
 
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
         return np.abs(measured[:, 0] - predicted[:, 0]) / self._x_scale

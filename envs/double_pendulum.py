@@ -377,6 +377,6 @@ class DoublePendulumEnv(PendulumEnv):
 
     scenario_cls = DoublePendulum
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         th = self.prediction["_modes"].angles(t, self.prediction["_angles0"])
         return np.stack([th[:, 0], th[:, 1] - th[:, 0]], axis=-1)  # hinge coordinates: hinge2 is relative

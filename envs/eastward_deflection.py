@@ -295,37 +295,37 @@ class EastwardDeflectionEnv(ScenarioEnv):
     max_force: ClassVar[float] = 0.1
     observables: ClassVar[tuple[str, ...]] = ("x_east", "y_north", "z_up")
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(15,), dtype=np.float64)
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_force, self.max_force, shape=(3,), dtype=np.float64)
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         self._body = int(self.model.body(BALL).id)
         self._axis = np.asarray(self.prediction["_axis"], dtype=float)
-        self._start_views()
+        self.start_views()
 
-    def _bind_views(self) -> None:
+    def bind_views(self) -> None:
         self._force = self._data.xfrc_applied[self._body, :3]
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         return np.concatenate([self._data.qpos, self._data.qvel])
 
-    def _apply_action(self, action: np.ndarray) -> None:
+    def apply_action(self, action: np.ndarray) -> None:
         self._force[:] = action
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         p = self.prediction
         return rot.drop_path(np.asarray(t, dtype=float), p["_field"], p["_rate_vec"], p["_r0"])
 
-    def _measure(self, obs: np.ndarray) -> list[float]:
+    def measured(self, obs: np.ndarray) -> list[float]:
         theta, x = -float(obs[0]), obs[1:4]
         c, s, n = math.cos(theta), math.sin(theta), self._axis
         r = x * c + np.cross(n, x) * s + n * float(n @ x) * (1 - c)
         return [float(r[0]), float(r[1]), float(r[2])]
 
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+    def deviation(self, measured: list[float], predicted: list[float]) -> float:
         d = [m - p for m, p in zip(measured, predicted, strict=True)]
         return math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / self.prediction["_height"]

@@ -371,29 +371,29 @@ class FoucaultEnv(ScenarioEnv):
     # The exact motion (a closure over scipy's dense output): solved again by a copy that needs it.
     _recomputed: ClassVar[tuple[str, ...]] = ("_motion", "_motion_for")
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(9,), dtype=np.float64)
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_torque, self.max_torque, shape=(2,), dtype=np.float64)
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         p = self.prediction
         self._dof = int(self.model.joint(SWING).dofadr[0])
         self._scale = p["_length"] * math.sin(p["_amplitude"])
-        self._start_views()
+        self.start_views()
 
-    def _bind_views(self) -> None:
+    def bind_views(self) -> None:
         self._torque = self._data.qfrc_applied[self._dof : self._dof + 2]
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         return np.concatenate([self._data.qpos, self._data.qvel])
 
-    def _apply_action(self, action: np.ndarray) -> None:
+    def apply_action(self, action: np.ndarray) -> None:
         self._torque[:] = action
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         p = self.prediction
         if getattr(self, "_motion_for", None) is not p:
             self._motion = rot.rotating_pendulum(
@@ -404,11 +404,11 @@ class FoucaultEnv(ScenarioEnv):
         east, north = p["_axes"]
         return np.stack([east @ r, north @ r], axis=1)
 
-    def _measure(self, obs: np.ndarray) -> list[float]:
+    def measured(self, obs: np.ndarray) -> list[float]:
         q = obs[1:5]
         r = rotating.rotate(q, np.array([0.0, 0.0, -self.prediction["_length"]]))
         east, north = self.prediction["_axes"]
         return [float(r @ east), float(r @ north)]
 
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+    def deviation(self, measured: list[float], predicted: list[float]) -> float:
         return math.hypot(measured[0] - predicted[0], measured[1] - predicted[1]) / self._scale

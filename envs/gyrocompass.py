@@ -690,51 +690,51 @@ class GyrocompassEnv(ScenarioEnv):
     observables = ("azimuth",)
     max_torque: ClassVar[float] = 0.1
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(6,), dtype=np.float64)
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_torque, self.max_torque, shape=(1,), dtype=np.float64)
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         j = _joints(self.model)
         self._gimbal_q, self._gimbal_v = j.gimbal_q, j.gimbal_v
         self._north = self.prediction["_geometry"].north
         self._scale = float(self.prediction["_amplitude"])
-        self._start_views()
+        self.start_views()
 
-    def _bind_views(self) -> None:
+    def bind_views(self) -> None:
         self._qfrc = self._data.qfrc_applied
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         obs = np.empty(6)
         mujoco.mj_getState(self.model, self._data, obs, mujoco.mjtState.mjSTATE_QPOS | mujoco.mjtState.mjSTATE_QVEL)
         return obs
 
-    def _apply_action(self, action: np.ndarray) -> None:
+    def apply_action(self, action: np.ndarray) -> None:
         self._qfrc[self._gimbal_v] = action.item()
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         p = self.prediction
         north = p["_geometry"].north
         alpha = p["_theory"].azimuth(np.asarray(t) - self._time0, p["_azimuth0"] - north, p["_rate0"])
         return (alpha + north)[:, None]
 
-    def _measure(self, obs: np.ndarray) -> list[float]:
+    def measured(self, obs: np.ndarray) -> list[float]:
         return [float(obs[self._gimbal_q])]
 
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+    def deviation(self, measured: list[float], predicted: list[float]) -> float:
         return abs(measured[0] - predicted[0]) / self._scale
 
-    def _observations(self, worlds) -> np.ndarray:
+    def observe_batch(self, worlds) -> np.ndarray:
         return np.concatenate([worlds.qpos, worlds.qvel], axis=1)
 
-    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+    def apply_actions(self, actions: np.ndarray, worlds) -> None:
         worlds.qfrc_applied[:, self._gimbal_v] = actions[:, 0]
 
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
+    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
         return obs[:, self._gimbal_q : self._gimbal_q + 1]
 
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
         return np.abs(measured[:, 0] - predicted[:, 0]) / self._scale

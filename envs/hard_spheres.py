@@ -684,11 +684,11 @@ class HardSpheresEnv(FreePairEnv):
     default_frame_skip: ClassVar[int] = 40
     max_force: ClassVar[float] = 1.0
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         # Read or written every step (issue 8): the joints' addresses (`HardSpheres._state` looks four up by name,
         # ~0.4 us each), the projectile's id and the contact distance a, cached here; views into `self.data`
-        # (`_bind_views`).
+        # (`bind_views`).
         model = self.model
         adr = {name: model.joint(name).id for name in ("projectile", "target")}
         self._slices = tuple(
@@ -698,13 +698,13 @@ class HardSpheresEnv(FreePairEnv):
         )
         self._body_id = model.body("projectile").id
         self._scale = float(self.prediction["_a"])  # the deviation's length: the contact distance a
-        self._start_views()
+        self.start_views()
 
     # The soft-contact solutions (closures over scipy's dense output), one per configuration: solved again by a copy
     # that needs one.
     _recomputed: ClassVar[tuple[str, ...]] = ("_motions", "_motion")
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         """r(t) of the soft-contact ODE (zero action), shape (len(t), 3); solved once per configuration (its initial
         relative state, contact distance, stiffness and run length), not at every reset: a 33-step episode spent
         ~36 ms of each reset on it."""

@@ -1017,26 +1017,26 @@ class HeavyTopEnv(RotorEnv):
 
     observables = ("theta",)
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         top = self.prediction["_theory"]
         return top.theta_at_w(top.w(t))[:, None]
 
-    def _measure(self, obs: np.ndarray) -> tuple[float]:
+    def measured(self, obs: np.ndarray) -> tuple[float]:
         # body z-axis in the world: e3 = (2(xz + wy), 2(yz - wx), 1 - 2(x^2 + y^2)) for a unit quaternion,
         # so sin(theta) = |(e3x, e3y)| = 2 sqrt((x^2 + y^2)(w^2 + z^2)).
         w, x, y, z = obs[:4].tolist()
         r2 = x * x + y * y
         return (math.atan2(2.0 * math.sqrt(r2 * (w * w + z * z)), 1.0 - 2.0 * r2),)
 
-    def _deviation(self, measured: tuple[float], predicted: np.ndarray) -> float:
+    def deviation(self, measured: tuple[float], predicted: np.ndarray) -> float:
         return abs(measured[0] - float(predicted[0])) / math.pi
 
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
+    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
         w, x, y, z = obs[:, :4].T
         r2 = x * x + y * y
-        # math.atan2 per copy, as `_measure` takes it (numpy's SIMD arctan2 may round the last bit otherwise)
+        # math.atan2 per copy, as `measured` takes it (numpy's SIMD arctan2 may round the last bit otherwise)
         sin_theta, cos_theta = 2.0 * np.sqrt(r2 * (w * w + z * z)), 1.0 - 2.0 * r2
         return np.array(list(map(math.atan2, sin_theta.tolist(), cos_theta.tolist())))[:, None]
 
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
         return np.abs(measured[:, 0] - predicted[:, 0]) / math.pi

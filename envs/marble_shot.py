@@ -350,19 +350,19 @@ class MarbleShotEnv(BlowEnv):
 
     observables = ("x", "y", "heading")
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         pose = self._stick_pose_theory(t)
         pose[np.asarray(t) >= self.prediction["_t_first_hit"]] = np.nan  # not scored after the first collision
         return pose
 
-    def _measure(self, obs: np.ndarray) -> list[float]:
+    def measured(self, obs: np.ndarray) -> list[float]:
         return obs.tolist()[:3]
 
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+    def deviation(self, measured: list[float], predicted: list[float]) -> float:
         return self._pose_deviation(measured, predicted)
 
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
+    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
         return obs[:, :3]
 
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
         return self._pose_deviations(measured, predicted)

@@ -176,6 +176,6 @@ class SimplePendulumEnv(PendulumEnv):
 
     scenario_cls = Pendulum
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         p = self.prediction
         return osc.pendulum_angle(t, p["_length_eq"], p["_g"], p["_amplitude"])[:, None]

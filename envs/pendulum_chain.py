@@ -443,10 +443,10 @@ class PendulumChainEnv(PendulumEnv):
 
     scenario_cls = PendulumChain
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         return self.prediction["_modes"].angles(t, self.prediction["_angles0"])
 
-    def _load(self, case: str, params: Mapping[str, Any]) -> None:
+    def load(self, case: str, params: Mapping[str, Any]) -> None:
         if hasattr(self, "model"):  # the observation space is fixed at construction: so is n
             n = self.scenario.resolve(self.scenario.case(case), params)["n"]
             if n != self.model.njnt:
@@ -454,4 +454,4 @@ class PendulumChainEnv(PendulumEnv):
                     f"parameter 'n' = {n:g} cannot differ from the env's {self.model.njnt} pendulums (the "
                     "observation space depends on it); make a new env instead"
                 )
-        super()._load(case, params)
+        super().load(case, params)

@@ -160,10 +160,10 @@ class PendulumEnergyTransferEnv(ClosedLoopTask, PendulumEnv):
         self._task_duration = 1.0  # replaced by the sampled T at every reset
         super().__init__(**kwargs)
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(2 * self.model.nq + 1,), dtype=np.float64)
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         left = self._nsteps * self._env_dt - (self.data.time - self._time0)
         return np.concatenate((self.data.qpos, self.data.qvel, (left,)))
 
@@ -188,7 +188,7 @@ class PendulumEnergyTransferEnv(ClosedLoopTask, PendulumEnv):
             self._nsteps,
         )
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_torque, self.max_torque, shape=(1,), dtype=np.float64)
 
     def energy2(self) -> float:

@@ -415,7 +415,7 @@ class PendulumEnv(ScenarioEnv):
     first pendulum's hinge through ``qfrc_applied``, clipped to +-`max_torque`. The observables compared with
     theory are the hinge angles (named after their joints); the reward is minus the largest deviation of a hinge
     angle from the closed-form motion, divided by the largest initial angle ``prediction["_scale"]``. Subclasses
-    implement `_theory`.
+    implement `theory`.
 
     Observation (float64, shape (2 n,), n hinges)
 
@@ -433,50 +433,50 @@ class PendulumEnv(ScenarioEnv):
     def observables(self) -> tuple[str, ...]:  # one per hinge: the number depends on the model (the chain's n)
         return tuple(self.model.joint(i).name for i in range(self.model.njnt))
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(2 * self.model.nq,), dtype=np.float64)
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_torque, self.max_torque, shape=(1,), dtype=np.float64)
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         # Read per step: cached here (a MuJoCo attribute or a mapping look-up costs ~0.1 us each).
         self._nq = self.model.nq
         self._nobs = 2 * self._nq
         self._scale = float(self.prediction["_scale"])
-        self._start_views()
+        self.start_views()
 
-    def _bind_views(self) -> None:
-        """The generalised forces the action writes into (`ScenarioEnv._bind_views`)."""
+    def bind_views(self) -> None:
+        """The generalised forces the action writes into (`ScenarioEnv.bind_views`)."""
         self._qfrc = self._data.qfrc_applied
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         # qpos then qvel, in one C call: the state components (QPOS | QVEL) in MuJoCo's order. `_data`, not the
         # `data` property: ~40 ns less a read, every step.
         obs = np.empty(self._nobs)
         mujoco.mj_getState(self.model, self._data, obs, _QPOS_QVEL)
         return obs
 
-    def _apply_action(self, action: np.ndarray) -> None:
+    def apply_action(self, action: np.ndarray) -> None:
         self._qfrc[0] = action.item()  # a Python float: cheaper to read and to store than action[0]
 
-    def _observations(self, worlds) -> np.ndarray:
+    def observe_batch(self, worlds) -> np.ndarray:
         return np.concatenate([worlds.qpos, worlds.qvel], axis=1)
 
-    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+    def apply_actions(self, actions: np.ndarray, worlds) -> None:
         worlds.qfrc_applied[:, 0] = actions[:, 0]
 
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
+    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
         return obs[:, : self._nq]
 
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        return np.abs(measured - predicted).max(axis=1) / self._scale  # NaN propagates, as in `_deviation`
+    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        return np.abs(measured - predicted).max(axis=1) / self._scale  # NaN propagates, as in `deviation`
 
-    def _measure(self, obs: np.ndarray) -> list[float]:
+    def measured(self, obs: np.ndarray) -> list[float]:
         return obs.tolist()[: self._nq]
 
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+    def deviation(self, measured: list[float], predicted: list[float]) -> float:
         # max |measured - predicted| over Python floats: numpy's number (NaN included) without three temporaries
         # and a reduction per step.
         if self._nq == 1:  # a lone pendulum: no loop (NaN propagates through abs and the division)

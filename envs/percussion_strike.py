@@ -91,7 +91,7 @@ class PercussionStrikeEnv(ShotTask):
     impulse_range: ClassVar[tuple[float, float]] = (0.2, 2.0)  # N s
     target_range: ClassVar[tuple[float, float]] = (5.0, 20.0)  # m/s
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float64)
 
     def _target_ranges(self) -> dict[str, tuple[float, float]]:

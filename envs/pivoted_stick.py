@@ -296,22 +296,22 @@ class PivotedStickEnv(BlowEnv):
 
     observables = ("heading", "pin_drift")
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         tp = np.asarray(t) - 0.5 * self.prediction["_tau"]
         return np.stack([self.prediction["angular-velocity"] * tp, np.zeros_like(tp)], axis=1)
 
-    def _measure(self, obs: np.ndarray) -> list[float]:
+    def measured(self, obs: np.ndarray) -> list[float]:
         x, y, heading = obs.tolist()[:3]
         return [heading, math.hypot(x, y)]
 
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+    def deviation(self, measured: list[float], predicted: list[float]) -> float:
         (heading, drift), (heading_theory, _) = measured, predicted
         return abs(wrap_angle(heading - heading_theory)) / math.pi + drift / self._length
 
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
-        # math.hypot per copy, as `_measure` takes it (CPython's hypot is its own algorithm, not libm's)
+    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
+        # math.hypot per copy, as `measured` takes it (CPython's hypot is its own algorithm, not libm's)
         return np.stack([obs[:, 2], list(map(math.hypot, obs[:, 0].tolist(), obs[:, 1].tolist()))], axis=1)
 
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
         (heading, drift), (heading_theory, _) = measured.T, predicted.T
         return np.abs(wrap_angle(heading - heading_theory)) / math.pi + drift / self._length

@@ -5,7 +5,7 @@ world z, so its heading is the angle of body y from world y and omega_z is both 
 component. `PlanarMotion` works on whole trajectories (vectorised over time) or single states; an env step reads
 its one state in Python floats instead (`heading`, `dot` on the rows of `frames.matrix_rows`: the same arithmetic,
 without arrays). `BlowEnv` is the env plumbing for scenarios whose episode starts with a blow: the scenario's pulse
-(`Scenario.control`) is delivered during ``reset`` (the `ScenarioEnv._begin` hook), so an episode starts just
+(`Scenario.control`) is delivered during ``reset`` (the `ScenarioEnv.begin_episode` hook), so an episode starts just
 after the blow.
 """
 
@@ -102,8 +102,8 @@ def body_state(model: mujoco.MjModel, data: mujoco.MjData, body: str) -> PlanarM
 class BlowEnv(ScenarioEnv):
     """Env plumbing for one body struck at the start of the episode.
 
-    ``reset`` delivers the scenario's blow (its `Scenario.control` pulse, in `_begin`) before returning, so the first
-    observation is the state just after the blow; the action is then a small extra planar force and torque on
+    ``reset`` delivers the scenario's blow (its `Scenario.control` pulse, in `begin_episode`) before returning, so the
+    first observation is the state just after the blow; the action is then a small extra planar force and torque on
     `body` (world frame, through ``xfrc_applied``): (f_x N, f_y N, tau_z N m), clipped to +-`max_force`.
     Zero action is the textbook problem. Observation (float64, shape (6,)):
 
@@ -120,33 +120,33 @@ class BlowEnv(ScenarioEnv):
     body: ClassVar[str]
     max_force: ClassVar[float] = 0.1
 
-    def _begin(self) -> None:
+    def begin_episode(self) -> None:
         if self.model.nu:  # a model with an actuator is struck by a pulse (rigidbench.pulse)
             for row in self.scenario.control(self.model, self.model.opt.timestep, pulse.steps(self.model)):
                 self.data.ctrl[:] = row
                 mujoco.mj_step(self.model, self.data)
             self.data.ctrl[:] = 0.0
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(6,), dtype=np.float64)
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_force, self.max_force, shape=(3,), dtype=np.float64)
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         # Read or written every step (issue 8): the body's free-joint addresses and id, cached here (a look-up by
-        # name costs ~0.4 us), and views into `self.data` (`_bind_views`).
+        # name costs ~0.4 us), and views into `self.data` (`bind_views`).
         body = self.model.body(self.body)
         joint = body.jntadr[0]
         qpos, dof = int(self.model.jnt_qposadr[joint]), int(self.model.jnt_dofadr[joint])
         self._free_qpos, self._free_qvel = slice(qpos, qpos + 7), slice(dof, dof + 6)
         self._body_id = body.id
         self._length = self._actual.get("length")  # a stick's full length L (m), the scale of `_pose_deviation`
-        self._start_views()
+        self.start_views()
 
-    def _bind_views(self) -> None:
-        """The free joint's qpos and qvel and the body's xfrc_applied row (`ScenarioEnv._bind_views`)."""
+    def bind_views(self) -> None:
+        """The free joint's qpos and qvel and the body's xfrc_applied row (`ScenarioEnv.bind_views`)."""
         data = self.data
         self._qpos, self._qvel = data.qpos[self._free_qpos], data.qvel[self._free_qvel]
         self._xfrc = data.xfrc_applied[self._body_id]
@@ -155,18 +155,18 @@ class BlowEnv(ScenarioEnv):
         """The body's free-joint qpos [x, y, z, qw, qx, qy, qz] and qvel [v_W, omega_B] now, as Python floats."""
         return self._qpos.tolist(), self._qvel.tolist()
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         # PlanarMotion's heading and omega_W for one state, in Python floats: ~7x cheaper than its arrays. Plain
         # unpacking (no starred names, no slices): ~0.3 us a step less.
         (x, y, _, q_w, q_x, q_y, q_z), (v_x, v_y, _, w_x, w_y, w_z) = self._free_joint()
         R = frames.matrix_rows(q_w, q_x, q_y, q_z)
         return np.array([x, y, heading(R), v_x, v_y, dot(R[2], (w_x, w_y, w_z))])
 
-    def _apply_action(self, action: np.ndarray) -> None:
+    def apply_action(self, action: np.ndarray) -> None:
         self._xfrc[:] = self._wrench(action.tolist())
 
-    def _observations(self, worlds) -> np.ndarray:
-        # `_observation` on arrays over the copies: the same operations in the same order (heading's atan2 per copy)
+    def observe_batch(self, worlds) -> np.ndarray:
+        # `observe` on arrays over the copies: the same operations in the same order (heading's atan2 per copy)
         (x, y, _, q_w, q_x, q_y, q_z), (v_x, v_y, _, w_x, w_y, w_z) = self._free_joints(worlds)
         R = frames.matrix_rows(q_w, q_x, q_y, q_z, sqrt=np.sqrt)
         return np.stack([x, y, headings(R), v_x, v_y, dot(R[2], (w_x, w_y, w_z))], axis=1)
@@ -175,7 +175,7 @@ class BlowEnv(ScenarioEnv):
         """The body's free-joint qpos and qvel components, each an array over the copies (`_free_joint`)."""
         return worlds.qpos[:, self._free_qpos].T, worlds.qvel[:, self._free_qvel].T
 
-    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+    def apply_actions(self, actions: np.ndarray, worlds) -> None:
         xfrc = worlds.xfrc_applied[:, self._body_id]
         for j, column in enumerate(self._wrench(list(actions.T))):  # columns of copies, or 0.0
             xfrc[:, j] = column

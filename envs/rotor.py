@@ -166,38 +166,38 @@ class RotorEnv(ScenarioEnv):
     max_torque: ClassVar[float] = 1.0
     body: ClassVar[str] = "top"
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
         high = np.full(7, np.inf)
         high[:4] = 1.0
         return gym.spaces.Box(-high, high, dtype=np.float64)
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-self.max_torque, self.max_torque, shape=(3,), dtype=np.float64)
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         # MuJoCo renormalises joint quaternions every step, so qpos holds a unit quaternion already.
         return np.concatenate(self._obs_views)
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         adr = int(self.model.jnt_qposadr[0]) + (3 if self.model.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE else 0)
         self._quat = slice(adr, adr + 4)
         self._body_id = self.model.body(self.body).id
-        self._start_views()
+        self.start_views()
 
-    def _bind_views(self) -> None:
-        """The quaternion, the body rates and the body's applied torque (`ScenarioEnv._bind_views`)."""
+    def bind_views(self) -> None:
+        """The quaternion, the body rates and the body's applied torque (`ScenarioEnv.bind_views`)."""
         data = self.data
         self._obs_views = (data.qpos[self._quat], data.qvel[-3:])
         self._torque = data.xfrc_applied[self._body_id, 3:6]
 
-    def _apply_action(self, action: np.ndarray) -> None:
+    def apply_action(self, action: np.ndarray) -> None:
         self._torque[:] = action
 
-    def _observations(self, worlds) -> np.ndarray:
+    def observe_batch(self, worlds) -> np.ndarray:
         return np.concatenate([worlds.qpos[:, self._quat], worlds.qvel[:, -3:]], axis=1)
 
-    def _apply_actions(self, actions: np.ndarray, worlds) -> None:
+    def apply_actions(self, actions: np.ndarray, worlds) -> None:
         worlds.xfrc_applied[:, self._body_id, 3:6] = actions
 
 
@@ -209,20 +209,20 @@ class FreeRotorEnv(RotorEnv):
 
     observables = ("omega1", "omega2", "omega3")
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         return self.prediction["_theory"].omega_body(t)
 
-    def _measure(self, obs: np.ndarray) -> list[float]:
+    def measured(self, obs: np.ndarray) -> list[float]:
         return obs.tolist()[4:7]
 
-    def _deviation(self, measured: list[float], predicted: list[float]) -> float:
+    def deviation(self, measured: list[float], predicted: list[float]) -> float:
         # |m - p| / |p| over three Python floats: cheaper per step than numpy's temporaries (same result to an ulp)
         (m1, m2, m3), (p1, p2, p3) = measured, predicted
         return math.sqrt(((m1 - p1) ** 2 + (m2 - p2) ** 2 + (m3 - p3) ** 2) / (p1 * p1 + p2 * p2 + p3 * p3))
 
-    def _measures(self, obs: np.ndarray) -> np.ndarray:
+    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
         return obs[:, 4:7]
 
-    def _deviations(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        (m1, m2, m3), (p1, p2, p3) = measured.T, predicted.T  # `_deviation`'s operations in its order
+    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        (m1, m2, m3), (p1, p2, p3) = measured.T, predicted.T  # `deviation`'s operations in its order
         return np.sqrt(((m1 - p1) ** 2 + (m2 - p2) ** 2 + (m3 - p3) ** 2) / (p1 * p1 + p2 * p2 + p3 * p3))

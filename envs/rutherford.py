@@ -951,22 +951,22 @@ class RutherfordEnv(FreePairEnv):
     scenario_cls = Rutherford
     default_frame_skip: ClassVar[int] = 20
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         pr = self.prediction["_pairs"]
         q = (int(pr["projectile_q"][0]), int(pr["target_q"][0]))
         v = (int(pr["projectile_v"][0]), int(pr["target_v"][0]))
         self._slices = self._pair_slices(q[0], q[1], v[0], v[1])
         self._body_id = int(forces.inverse_square(self.model).second[0])
         self._scale = float(coulomb.closest_approach(float(self.prediction["_b"][0]), self.prediction["_distance"]))
-        self._start_views()
+        self.start_views()
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         p = self.params
         force = p["m1"] * p["speed"] ** 2 / (4 * _distance(p))
         return gym.spaces.Box(-force, force, shape=(3,), dtype=np.float64)
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         p = self.prediction
         tt = np.atleast_1d(np.asarray(t, dtype=float)) - p["_t0"] - p["_t_half"]
         r, _ = coulomb.relative_orbit(tt, float(p["_b"][0]), p["_distance"], p["_speed"])

@@ -74,7 +74,7 @@ class ScatterToAngleEnv(ShotTask):
     min_impact: ClassVar[float] = 1e-3
     largest_target: ClassVar[float] = 0.6  # rad
 
-    def _action_space(self) -> gym.spaces.Box:
+    def define_action_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float64)
 
     def _target_ranges(self) -> dict[str, tuple[float, float]]:

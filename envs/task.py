@@ -122,7 +122,7 @@ class TaskEnv(ScenarioEnv):
         if unknown:
             raise ValueError(f"unknown reset option(s) {sorted(unknown)}; valid: 'params', 'target'")
         self._episode_params = {**self._params, **dict(options.get("params") or {})}
-        self._load(self._case_name, self._episode_params)
+        self.load(self._case_name, self._episode_params)
         ranges = self._target_ranges()
         if "target" in options:
             self.target = self._complete_target(self._checked_target(options["target"], ranges))
@@ -131,7 +131,7 @@ class TaskEnv(ScenarioEnv):
         self._start_episode()
         self._reference = self._reference_rewards() if self._with_regret else None
         info = {"target": dict(self.target), "params": dict(self._actual), "settings": dict(self._settings_record)}
-        return self._observation(), info
+        return self.observe(), info
 
     def step(self, action):
         action = self._checked_action(action)
@@ -163,9 +163,9 @@ class TaskEnv(ScenarioEnv):
 
     def _observed(self) -> np.ndarray:
         """The observation after `_advance` (the state it left); read afresh unless the task kept it."""
-        return self._observation()
+        return self.observe()
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         return np.empty((len(t), 0))  # a task compares outcomes with its target, not a trajectory with theory
 
     def _reference_rewards(self) -> np.ndarray | None:
@@ -208,21 +208,21 @@ class ClosedLoopTask(TaskEnv):
     def _terms(self, action: np.ndarray) -> dict[str, float]:
         raise NotImplementedError
 
-    def _load(self, case: str, params: Mapping[str, Any]) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params: Mapping[str, Any]) -> None:
+        super().load(case, params)
         self.episode_duration = self._task_duration
         self._nsteps = max(1, round(self._task_duration / self._env_dt))
         self._scratch = mujoco.MjData(self.model)
 
     def _advance(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
-        self._apply_action(action)
+        self.apply_action(action)
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
         return self._outcome(action)
 
     def _outcome(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
         self._k += 1
         # Kept for `_finish` (issue 8): the step's observation is this one, not a second read of the same state.
-        obs = self._last_observation = self._observation()
+        obs = self._last_observation = self.observe()
         if self._diverged(obs):
             return {}, {"diverged": True}
         return self._terms(action), {}
@@ -277,10 +277,10 @@ class ShotTask(TaskEnv):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "rgb_array_list"], "render_fps": 30}
     SHOT_FRAMES: ClassVar[int] = 90
 
-    def _observation_space(self) -> gym.spaces.Box:
+    def define_observation_space(self) -> gym.spaces.Box:
         return gym.spaces.Box(-np.inf, np.inf, shape=(len(self.target_names),), dtype=np.float64)
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         return np.array([self.target.get(name, 0.0) for name in self.target_names])
 
     def _shot(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
@@ -292,8 +292,8 @@ class ShotTask(TaskEnv):
     def _advance(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
         return self._shot(action)
 
-    def _load(self, case: str, params: Mapping[str, Any]) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params: Mapping[str, Any]) -> None:
+        super().load(case, params)
         self.metadata = {**type(self).metadata}  # a shot is replayed in slow motion, not in real time
         self._shot_states: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
@@ -331,7 +331,7 @@ class ShotTask(TaskEnv):
         only part of it; `max_duration` (s) caps the scenario's run. Returns the measured observables, or None if
         the simulation diverged.
         """
-        self._load(self._case_name, {**self._episode_params, **overrides})
+        self.load(self._case_name, {**self._episode_params, **overrides})
         scenario, model = self.scenario, self.model
         duration = min(float(scenario.duration(self.prediction)), max_duration)
         nstep = steps_for(duration, model.opt.timestep)

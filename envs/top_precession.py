@@ -102,13 +102,13 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
         self._task_duration = float(duration)
         super().__init__(**kwargs)
 
-    def _observation_space(self):
-        space = super()._observation_space()
+    def define_observation_space(self):
+        space = super().define_observation_space()
         high = np.concatenate((space.high, [np.inf, np.pi]))
         low = np.concatenate((space.low, [-np.inf, 0.0]))
         return type(space)(low, high, dtype=np.float64)
 
-    def _observation(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         # RotorEnv's views of the quaternion and body rates (issue 8: slicing afresh costs ~0.2 us each), then the
         # target; one array, filled in place.
         quat, omega_B = self._obs_views
@@ -120,8 +120,8 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
         obs[8] = target["tilt"]
         return obs
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         motion = self.scenario.motion(self.model, np.zeros(1), self.data.qpos[None], self.data.qvel[None])
         self._inertia = motion.inertia_B  # about the pivot (THEORY.md R4)
         self._mgh = self.scenario._mgh(self.model)

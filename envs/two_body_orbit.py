@@ -738,10 +738,10 @@ class TwoBodyOrbitEnv(FreePairEnv):
 
     scenario_cls = TwoBodyOrbit
 
-    def _load(self, case: str, params) -> None:
-        super()._load(case, params)
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
         # Read or written every step: the joints' slices, body 1's id and the semi-major axis, cached here; views into
-        # `self.data` (`_bind_views`).
+        # `self.data` (`bind_views`).
         q1, q2, d1, d2 = TwoBodyOrbit._addresses(self.model)
         self._slices = (
             ("qpos", slice(q1, q1 + 3)),
@@ -751,9 +751,9 @@ class TwoBodyOrbitEnv(FreePairEnv):
         )
         self._body_id = self.model.body("body1").id
         self._scale = float(self.prediction["_theory"].semi_major)
-        self._start_views()
+        self.start_views()
 
-    def _theory(self, t: np.ndarray) -> np.ndarray:
+    def theory(self, t: np.ndarray) -> np.ndarray:
         """r(t) of the closed form (zero action), shape (len(t), 3)."""
         r, _ = self.prediction["_theory"].position(np.asarray(t, dtype=float) - self._time0)
         return r

@@ -2,9 +2,9 @@
 
 ``gymnasium.make_vec("rigidbench/HeavyTop-v0", num_envs=N, vectorization_mode="vector_entry_point")`` builds a
 `VectorScenarioEnv`: one template env resolves the case, builds the model, sets the initial state and tabulates the
-theory (`ScenarioEnv._load`), and the N copies' physics run as one batch on an engine (`rigidbench.engines.worlds`:
+theory (`ScenarioEnv.load`), and the N copies' physics run as one batch on an engine (`rigidbench.engines.worlds`:
 C MuJoCo's `mujoco.batch`, MJX or MuJoCo Warp). Observations, measurements, deviations and rewards are computed
-for the whole batch in arrays (the env's batched hooks, `ScenarioEnv._observations` and its siblings), not by N
+for the whole batch in arrays (the env's batched hooks, `ScenarioEnv.observe_batch` and its siblings), not by N
 Python calls.
 
 On the C engine a batched env equals gymnasium's `SyncVectorEnv` of the same env bit for bit (observations,
@@ -157,11 +157,11 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         env, worlds = self.env, self.worlds
         actions = self._checked(actions)
         restart = np.flatnonzero(self._autoreset)
-        env._apply_actions(actions, worlds)
+        env.apply_actions(actions, worlds)
         worlds.step(self._frame_skip)
         self._k += 1
         k = self._k
-        obs = env._observations(worlds)
+        obs = env.observe_batch(worlds)
         time = worlds.time.copy()
         table = self._table
         inside = k < len(table)
@@ -169,10 +169,10 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
             predicted = table[k]
         else:
             predicted = np.array(
-                [table[i] if inside[j] else env._theory(np.array([time[j]]))[0] for j, i in enumerate(k.tolist())]
+                [table[i] if inside[j] else env.theory(np.array([time[j]]))[0] for j, i in enumerate(k.tolist())]
             )
-        measured = np.asarray(env._measures(obs), dtype=float)
-        deviation = np.asarray(env._deviations(measured, predicted), dtype=float)
+        measured = np.asarray(env.measured_batch(obs), dtype=float)
+        deviation = np.asarray(env.deviation_batch(measured, predicted), dtype=float)
         reward = np.where(deviation <= DEVIATION_CAP, -deviation, -DEVIATION_CAP)
         # `ScenarioEnv.step`'s divergence test, for every copy: time fell behind (MuJoCo reset a blown-up state) or
         # the observation is not finite.

@@ -87,11 +87,11 @@ class ScenarioTask(base.Task):
 
     def before_step(self, action, physics: Physics) -> None:
         self._bind(physics)
-        self._env._apply_action(self._env._checked_action(np.asarray(action, dtype=float)))
+        self._env.apply_action(self._env._checked_action(np.asarray(action, dtype=float)))
 
     def get_observation(self, physics: Physics) -> collections.OrderedDict:
         self._bind(physics)
-        return collections.OrderedDict(observation=self._env._observation())
+        return collections.OrderedDict(observation=self._env.observe())
 
     def get_reward(self, physics: Physics) -> float:
         self._bind(physics)
@@ -133,14 +133,14 @@ class ControlTask(base.Task):
     def before_step(self, action, physics: Physics) -> None:
         self._bind(physics)
         self._action = self._env._checked_action(np.asarray(action, dtype=float))
-        self._env._apply_action(self._action)
+        self._env.apply_action(self._action)
 
     def after_step(self, physics: Physics) -> None:
         self._env._k += 1  # the env's step counter: its reward terms and theory policy may depend on it
 
     def get_observation(self, physics: Physics) -> collections.OrderedDict:
         self._bind(physics)
-        return collections.OrderedDict(observation=self._env._observation())
+        return collections.OrderedDict(observation=self._env.observe())
 
     def get_reward(self, physics: Physics) -> float:
         self._bind(physics)

@@ -127,7 +127,7 @@ def test_dm_control_suite_runs_every_closed_loop_task_like_gymnasium(task_env_id
         return
     env = suite.load(task_env_id, task_kwargs={"random": 0})
     gym_env = gym.make(task_env_id).unwrapped
-    for _episode in range(2):  # the second starts from the env's kept start (`ScenarioEnv._load`)
+    for _episode in range(2):  # the second starts from the env's kept start (`ScenarioEnv.load`)
         ts = env.reset()
         target = dict(env.task._env.target)
         total, steps = 0.0, 0

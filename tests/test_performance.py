@@ -81,10 +81,10 @@ def test_pendulum_deviation_over_floats_equals_numpy(pendulum_env):
     n = env.model.nq
     for _ in range(200):
         measured, predicted = rng.normal(size=n), rng.normal(size=n)
-        assert env._deviation(measured, predicted) == _pendulum_deviation_reference(env, measured, predicted)
+        assert env.deviation(measured, predicted) == _pendulum_deviation_reference(env, measured, predicted)
     nan = np.zeros(n)
     nan[n // 2] = np.nan
-    assert math.isnan(env._deviation(nan, np.zeros(n)))
+    assert math.isnan(env.deviation(nan, np.zeros(n)))
 
 
 @pytest.mark.parametrize("rotor_env", ["rigidbench/FreeSymmetricTop-v0", "rigidbench/FreeAsymmetricTop-v0"])
@@ -98,7 +98,7 @@ def test_rotor_deviation_over_floats_equals_numpy(rotor_env):
         measured, predicted = rng.normal(size=3), rng.normal(size=3)
         diff = measured - predicted
         expected = float(np.sqrt(diff @ diff / (predicted @ predicted)))
-        got = env._deviation(measured.tolist(), predicted.tolist())
+        got = env.deviation(measured.tolist(), predicted.tolist())
         worst = max(worst, abs(got - expected) / expected)
     assert worst <= 4e-16  # numpy's dot may sum in another order: an ulp or two at most
 
@@ -110,7 +110,7 @@ def test_observation_fast_paths_equal_the_state_they_copy(env_id):
         obs, *_ = env.step(env.action_space.sample())
         # A fresh array every step (a caller may keep it), equal to the observation read afresh.
         assert not np.shares_memory(obs, env.data.qpos) and not np.shares_memory(obs, env.data.qvel)
-        np.testing.assert_array_equal(obs, env._observation())
+        np.testing.assert_array_equal(obs, env.observe())
 
 
 def test_rotor_views_follow_a_replaced_data():
@@ -120,8 +120,8 @@ def test_rotor_views_follow_a_replaced_data():
     other = mujoco.MjData(env.model)
     other.qpos[:4] = [0.0, 1.0, 0.0, 0.0]
     env.data = other
-    np.testing.assert_array_equal(env._observation()[:4], [0.0, 1.0, 0.0, 0.0])
-    env._apply_action(np.full(3, 0.01))
+    np.testing.assert_array_equal(env.observe()[:4], [0.0, 1.0, 0.0, 0.0])
+    env.apply_action(np.full(3, 0.01))
     np.testing.assert_array_equal(other.xfrc_applied[env.model.body("top").id, 3:6], np.full(3, 0.01))
 
 
@@ -209,7 +209,7 @@ PERCUSSION_ENVS = {
 
 
 def _percussion_reference_observation(env):
-    """`BlowEnv._observation` (and `CueStrikeEnv._observation`) as it was before the float fast path (issue 8):
+    """`BlowEnv.observe` (and `CueStrikeEnv.observe`) as it was before the float fast path (issue 8):
     `PlanarMotion`'s numpy arrays for the current state."""
     from rigidbench.envs.cue_strike import CueStrike, CueStrikeEnv
     from rigidbench.envs.planar import body_state
@@ -338,8 +338,8 @@ def test_blow_env_views_follow_a_replaced_data():
     other.qpos[:7] = [0.5, -0.25, 0.0, 1.0, 0.0, 0.0, 1.0]  # turned by pi/2 about z (normalised by the env)
     other.qvel[:6] = [1.0, 2.0, 0.0, 0.0, 0.0, 3.0]
     env.data = other
-    np.testing.assert_allclose(env._observation(), [0.5, -0.25, np.pi / 2, 1.0, 2.0, 3.0], rtol=1e-15)
-    env._apply_action(np.array([0.01, 0.02, 0.03]))
+    np.testing.assert_allclose(env.observe(), [0.5, -0.25, np.pi / 2, 1.0, 2.0, 3.0], rtol=1e-15)
+    env.apply_action(np.array([0.01, 0.02, 0.03]))
     np.testing.assert_array_equal(other.xfrc_applied[env.model.body("stick").id], [0.01, 0.02, 0, 0, 0, 0.03])
 
 
@@ -411,8 +411,8 @@ def test_hard_spheres_views_follow_a_replaced_data():
     other.qpos[:] = np.arange(env.model.nq)
     env.data = other
     ref_obs, _, _ = _hard_spheres_reference(env)
-    np.testing.assert_array_equal(env._observation(), ref_obs)
-    env._apply_action(np.array([0.1, 0.2, 0.3]))
+    np.testing.assert_array_equal(env.observe(), ref_obs)
+    env.apply_action(np.array([0.1, 0.2, 0.3]))
     np.testing.assert_array_equal(other.xfrc_applied[env.model.body("projectile").id], [0.1, 0.2, 0.3, 0, 0, 0])
 
 
@@ -483,5 +483,5 @@ def test_top_precession_views_follow_a_replaced_data():
     other.qpos[:4] = [np.cos(0.2), np.sin(0.2), 0.0, 0.0]
     other.qvel[:] = [1.0, 2.0, 100.0]
     env.data = other
-    np.testing.assert_array_equal(env._observation()[:7], [*other.qpos[:4], 1.0, 2.0, 100.0])
+    np.testing.assert_array_equal(env.observe()[:7], [*other.qpos[:4], 1.0, 2.0, 100.0])
     assert env._terms(np.zeros(3)) == _top_precession_reference_terms(env)

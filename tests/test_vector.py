@@ -170,7 +170,7 @@ def test_batched_hooks_equal_the_per_copy_fallbacks():
     from rigidbench.envs.vector import VectorScenarioEnv
 
     fast_cls = env_classes()["rigidbench/PivotedStick-v0"]
-    hooks = ("_observations", "_apply_actions", "_measures", "_deviations")
+    hooks = ("observe_batch", "apply_actions", "measured_batch", "deviation_batch")
     plain_cls = type("PlainPivotedStick", (fast_cls,), {h: getattr(ScenarioEnv, h) for h in hooks})
     fast, plain = VectorScenarioEnv(fast_cls, 3, frame_skip=50), VectorScenarioEnv(plain_cls, 3, frame_skip=50)
     np.testing.assert_array_equal(fast.reset(seed=0)[0], plain.reset(seed=0)[0])
@@ -182,7 +182,7 @@ def test_batched_hooks_equal_the_per_copy_fallbacks():
 
 
 def test_a_reset_of_the_same_configuration_starts_as_a_fresh_env(validation_env_id):
-    """A reset of the configuration the env ran last restores its kept start (`ScenarioEnv._load`: parameters,
+    """A reset of the configuration the env ran last restores its kept start (`ScenarioEnv.load`: parameters,
     state and prediction computed once, the state copied back into the episode's MjData): the same state, observation,
     info and next steps as a fresh env's first reset, bit for bit."""
     env = gym.make(validation_env_id).unwrapped
