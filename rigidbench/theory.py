@@ -1,7 +1,8 @@
 """The repository's theory page (``docs/theory.md``): the IDs that checks cite, and links to their entries.
 
-Every check and domain names its theory in words that begin with (or contain) an equation ID such as ``O1`` or
-``T4`` (a family letter and a number). Each ID is a heading of ``docs/theory.md`` with an explicit anchor, so a
+Every check and domain names its theory in words that begin with the equation IDs it tests, such as ``O1`` or
+``T4`` (a family letter and a number), before the first colon or bracket: ``"O3/O4 measured in MuJoCo: ..."``,
+``"C2, C8 vs C5: ..."``. Symbols later in the text (``T0``, ``I1``, ``E0``) are the formula's, not IDs. Each ID is a heading of ``docs/theory.md`` with an explicit anchor, so a
 result row (its ``theory_ref``), ``rigidbench list`` and the HTML report can point a reader at the closed form,
 its conventions, its domain and its source.
 """
@@ -13,13 +14,15 @@ import re
 # Where the page lives, relative to the repository root (and to the docs of an installed copy's source).
 THEORY_PAGE = "docs/theory.md"
 # The public copy of the repository's docs that links in a report or a printed catalogue point to.
-_ID = re.compile(r"\b([A-Z][0-9]+[a-z]?)\b")
+_ID = re.compile(r"\b([A-Z][1-9][0-9]?)\b")
+# The leading clause of a theory text: everything before its first colon, bracket or semicolon.
+_LEADING = re.compile(r"^[^:(\[;]*")
 
 
 def theory_ids(text: str) -> list[str]:
-    """Every equation ID named in a check's or domain's theory text, in order, without repeats."""
+    """Every equation ID a check's or domain's theory text cites (in its leading clause), in order, no repeats."""
     seen: list[str] = []
-    for found in _ID.findall(text):
+    for found in _ID.findall(_LEADING.match(text).group(0)):
         if found not in seen:
             seen.append(found)
     return seen
