@@ -2,9 +2,9 @@
 
 Every check and domain names its theory in words that begin with the equation IDs it tests, such as ``O1`` or
 ``T4`` (a family letter and a number), before the first colon or bracket: ``"O3/O4 measured in MuJoCo: ..."``,
-``"C2, C8 vs C5: ..."``. Symbols later in the text (``T0``, ``I1``, ``E0``) are the formula's, not IDs. Each ID is a heading of ``docs/theory.md`` with an explicit anchor, so a
-result row (its ``theory_ref``), ``rigidbench list`` and the HTML report can point a reader at the closed form,
-its conventions, its domain and its source.
+``"C2, C8 vs C5: ..."``. Symbols later in the text (``T0``, ``I1``, ``E0``) are the formula's, not IDs. Each ID
+is a heading of ``docs/theory.md`` with an explicit anchor, so a result row (its ``theory_ref``), ``rigidbench
+list`` and the HTML report can point a reader at the closed form, its conventions, its domain and its source.
 """
 
 from __future__ import annotations
