@@ -67,10 +67,10 @@ MAX_ACCELERATION = 1e9
 # that could not fail.
 UNRESOLVED_FRACTION = 0.1
 
-# The prediction's entries keyed by check name (`Scenario.check_prediction_keys`): a tolerance that depends on the
-# run (`Scenario._scaled_check`), and a float32 engine's round-off scale, secular quantities and derived floors
-# (`Scenario.roundoff_scale`, `Scenario._roundoff_check`).
-PER_CHECK = ("_tolerance", "_roundoff_scale", "_roundoff_secular", "_roundoff_eps")
+# The prediction's entries keyed by check name (`Scenario.check_prediction_keys`): a tolerance and a relative check's
+# floor that depend on the run (`Scenario._scaled_check`, `Check.floor`), and a float32 engine's round-off scale,
+# secular quantities and derived floors (`Scenario.roundoff_scale`, `Scenario._roundoff_check`).
+PER_CHECK = ("_tolerance", "_floor", "_roundoff_scale", "_roundoff_secular", "_roundoff_eps")
 
 
 def round_step(h: float) -> float:
@@ -192,11 +192,18 @@ class Check:
         depends on the run (n^-1/2, k^-1/2) is given at the model's defaults here and replaced by the run's
         prediction (``prediction["_tolerance"][name]``, see `Scenario._scaled_check`).
     kind : {"rel", "abs"}
-        Relative error ``|m - e| / |e|`` or absolute error ``|m - e|``.
+        Relative error ``|m - e| / max(|e|, floor)`` or absolute error ``|m - e|``.
     reason : str
         Where the tolerance comes from (integrator order and step, contact stiffness, statistics, ...).
     theory : str
-        THEORY.md entry and seed location of the prediction.
+        The docs/theory.md ID(s) of the prediction first (``"T4: ..."``, `rigidbench.theory`), then the formula and
+        its seed location.
+    floor : float
+        For a relative check whose expected value can come near 0 over the ranges (a marble the stick never
+        reaches, a ball a plastic cushion stops): the size, in the check's unit, below which the error is no longer
+        relative to the expected value but to this floor, because the simulation's errors keep that size (they
+        scale with the motion that sets it, e.g. the stick's speed). 0 (the default) for a pure relative error.
+        A floor that depends on the run is given as ``prediction["_floor"][name]``; the reason states the rule.
     """
 
     name: str
@@ -205,6 +212,7 @@ class Check:
     kind: str
     reason: str
     theory: str
+    floor: float = 0.0
 
     def __post_init__(self) -> None:
         if self.kind not in ("rel", "abs"):
@@ -214,7 +222,8 @@ class Check:
         diff = abs(measured - expected)
         if self.kind == "abs":
             return diff
-        return diff / abs(expected) if expected != 0 else math.inf
+        scale = max(abs(expected), self.floor)
+        return diff / scale if scale != 0 else math.inf
 
 
 class Scenario:

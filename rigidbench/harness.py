@@ -107,10 +107,16 @@ class Prepared:
 def scaled_check(scenario: Scenario, name: str, prediction: Mapping[str, Any]) -> Check:
     """The check, with its tolerance replaced by ``prediction["_tolerance"][name]`` when the prediction
     gives one: a bound that depends on the run (a Monte Carlo error ~ n^-1/2, a contact-stiffness bound
-    ~ k^-1/2). The check's `reason` must state the formula."""
+    ~ k^-1/2), and its relative floor by ``prediction["_floor"][name]`` (`Check.floor`). The check's `reason`
+    must state the formula."""
     check = scenario.check(name)
     tolerance = prediction.get("_tolerance", {}).get(name)
-    return check if tolerance is None else dataclasses.replace(check, tolerance=float(tolerance))
+    floor = prediction.get("_floor", {}).get(name)
+    if tolerance is not None:
+        check = dataclasses.replace(check, tolerance=float(tolerance))
+    if floor is not None:
+        check = dataclasses.replace(check, floor=float(floor))
+    return check
 
 
 def roundoff_check(

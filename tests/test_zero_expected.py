@@ -1,0 +1,37 @@
+"""Relative checks whose expected value reaches 0 inside the ranges a user sees (issue 35): scored against a floor
+(`Check.floor`) or refused by the case's regime, never an error of ``inf``."""
+
+import math
+
+import pytest
+
+from rigidbench import registry
+from rigidbench.contract import Check, OutsideDomain
+
+
+def test_a_relative_error_is_taken_against_the_floor_where_the_expected_value_is_smaller():
+    check = Check("speed", "m/s", 1e-3, "rel", "reason", "P5: theory", floor=2.0)
+    assert check.error(1.001, 1.0) == pytest.approx(0.0005)  # |e| = 1 < floor 2: relative to the floor
+    assert check.error(4.004, 4.0) == pytest.approx(0.001)  # |e| = 4 > floor: relative to |e|
+    assert check.error(0.0, 0.0) == 0.0
+    assert math.isinf(Check("speed", "m/s", 1e-3, "rel", "reason", "P5: theory").error(1e-17, 0.0))
+
+
+def test_a_plastic_cushion_at_the_no_skid_height_stops_the_ball_and_passes():
+    run = registry.get("cushion-rebound").run("no-skid", {"restitution": 0.0})
+    final = next(o for o in run.outcomes if o.check.name == "final-speed")
+    assert abs(final.expected) < 1e-15  # the ball is stopped dead: v_f = 0 up to round-off
+    assert final.check.floor > 0 and final.passed, (final.measured, final.expected, final.error)
+    assert all(o.passed for o in run.outcomes)
+
+
+def test_marble_shot_cop_at_a_refuses_an_offset_past_its_reach_naming_the_regime():
+    # A draw of issue 35: offset 0.237 L, where C's recoil never reaches A (expected speed 0).
+    params = {"mass": 74.79227110379072, "length": 2.100720447635213, "impulse": 41.47428004059938, "offset": 0.498}
+    with pytest.raises(OutsideDomain, match="outside the regime of case 'cop-at-a'"):
+        registry.get("marble-shot").prepare("cop-at-a", params)
+
+
+def test_marble_shot_cop_at_a_passes_at_the_end_of_its_reach():
+    run = registry.get("marble-shot").run("cop-at-a", {"offset": 1.05 / 6})
+    assert all(o.passed for o in run.outcomes), [(o.check.name, o.error) for o in run.outcomes]
