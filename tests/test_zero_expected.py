@@ -35,3 +35,52 @@ def test_marble_shot_cop_at_a_refuses_an_offset_past_its_reach_naming_the_regime
 def test_marble_shot_cop_at_a_passes_at_the_end_of_its_reach():
     run = registry.get("marble-shot").run("cop-at-a", {"offset": 1.05 / 6})
     assert all(o.passed for o in run.outcomes), [(o.check.name, o.error) for o in run.outcomes]
+
+
+def _ends(scenario, case, base):
+    """One parameter at a time put at each end of the range a user sees for `case` (its range, its dependent range
+    and the case's regime, intersected; just inside an open end), the others at the case's values."""
+    from rigidbench.params import Bound
+
+    for p in scenario.params:
+        if p.size != 1 or p.budget:
+            continue
+        ranges = [p.valid]
+        if p.within is not None:
+            ranges.append(p.within.range(base))
+        regime = case.ranges.get(p.name)
+        if regime is not None:
+            ranges.append(regime.range(base) if isinstance(regime, Bound) else regime)
+        if any(r.magnitude for r in ranges):
+            continue
+        low, high = max(ranges, key=lambda r: r.low), min(ranges, key=lambda r: r.high)
+        for r, end, side in ((low, low.low, -1), (high, high.high, 1)):
+            if not math.isfinite(end):
+                continue
+            is_open = r.low_open if side < 0 else r.high_open
+            span = (high.high - low.low) if math.isfinite(high.high - low.low) else max(abs(end), 1.0)
+            yield {p.name: end - side * 1e-9 * span if is_open else end}
+
+
+@pytest.mark.slow
+def test_every_relative_check_is_bounded_away_from_zero_or_has_a_floor_at_its_range_ends():
+    """Issue 35: a relative check whose expected value is 0 has an error of inf. At every range end of every
+    parameter of every case (refused sets aside), each relative check either expects a value away from 0 or
+    carries a floor (`Check.floor`)."""
+    zero = []
+    for slug, scenario in registry.scenarios().items():
+        relative = {c.name for c in scenario.checks if c.kind == "rel"}
+        for case in scenario.cases:
+            base = scenario.resolve(case)
+            for overrides in _ends(scenario, case, base):
+                try:
+                    prep = scenario.prepare(case.name, overrides)
+                except ValueError:  # refused before simulating (a domain, a regime, a run too long)
+                    continue
+                floors = prep.prediction.get("_floor", {})
+                for name in relative & set(case.checks):
+                    expected = float(prep.prediction[name])
+                    floor = floors.get(name, scenario.check(name).floor)
+                    if not floor > 0 and abs(expected) < 1e-12:  # SI units: 0 up to round-off
+                        zero.append((slug, case.name, name, overrides, expected))
+    assert not zero, zero
