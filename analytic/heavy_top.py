@@ -1,21 +1,11 @@
-"""The heavy symmetric top's rates, reference step and float32 round-off scales, from its closed form.
+"""The heavy top's rates, reference step, largest acceleration and float32 round-off scales, from its closed form
+(`rigidbench.analytic.tops.heavy_top`, docs/theory.md T2-T3); the scenario (`rigidbench.envs.heavy_top`) picks the
+run's length and rounds the step. Pure numpy functions of SI values; nothing here imports mujoco (house rule 2).
 
-`rigidbench.analytic.tops.heavy_top` gives the motion (docs/theory.md T2-T3); this module derives from it what a
-run of the heavy-top scenario needs to know before it starts: how fast the motion is (`Scales`), the largest
-RK4 step that keeps the integration error within a target (`step_limits`), the largest angular acceleration
-(`acceleration_bound`) and how float32 round-off shows in each checked quantity (`roundoff_scales`). The
-scenario (`rigidbench.envs.heavy_top`) chooses the run's length and rounds the step.
-
-Pure numpy functions of SI values; nothing here imports mujoco (house rule 2).
-
-Conventions: as `rigidbench.analytic.tops` (docs/theory.md section 0): moments of inertia about the pivot
-(``inertia_pivot`` = I1 + M h^2, docs/theory.md R4) and about the symmetry axis (``inertia_axial`` = I3), in
-kg m^2; ``mgh`` = M g h (J); z-x-z Euler angles phi, theta, psi; rates in rad/s.
-
-References
-----------
-[W] Wilcox, *Modern Introductory Mechanics Part II*, section 11.10 (seed 000).
-[T] docs/theory.md, entries T2-T3 (the heavy top), R7 (Euler's equations).
+Conventions (docs/theory.md section 0, as `rigidbench.analytic.tops`): ``inertia_pivot`` = I1 + M h^2 about the pivot
+(R4) and ``inertia_axial`` = I3 (kg m^2); ``mgh`` = M g h (J); ``spin`` = omega3, every rate in rad/s; the initial
+state (tilt, tilt_rate, precession, spin) as `tops.heavy_top` takes it. References: [W] Wilcox, *Modern
+Introductory Mechanics Part II*, section 11.10 (seed 000); [T] docs/theory.md T2-T3 (heavy top), R7 (Euler).
 """
 
 from __future__ import annotations
@@ -80,23 +70,8 @@ class Scales:
 
 
 def scales(top: tops.HeavyTop, inertia_pivot: float, inertia_axial: float, spin: float, transverse0: float) -> Scales:
-    """The rates of the motion `top` ([T] T2-T3).
-
-    Parameters
-    ----------
-    top : tops.HeavyTop
-        The closed form of the motion.
-    inertia_pivot, inertia_axial : float
-        I1 about the pivot and I3 (kg m^2).
-    spin : float
-        omega3 (rad/s).
-    transverse0 : float
-        The initial transverse body rate |omega_perp(0)| (rad/s).
-
-    Returns
-    -------
-    Scales
-    """
+    """The `Scales` of the motion `top` ([T] T2-T3), its initial transverse body rate |omega_perp(0)| being
+    `transverse0` (rad/s)."""
     w2, w1 = top.w_roots[1], top.w_roots[0]
     w = np.linspace(w2, w1, 257)
     # omega_perp^2 = theta_dot^2 + phi_dot^2 sin^2(theta) = alpha - beta u (energy, [T] T2) = k0 + beta w
@@ -113,10 +88,7 @@ def scales(top: tops.HeavyTop, inertia_pivot: float, inertia_axial: float, spin:
 
 def momentum_scale(inertia_pivot: float, inertia_axial: float, mgh: float, transverse0: float, spin: float) -> float:
     """L_scale = sqrt(|L(0)|^2 + 2 I1 M g h) (kg m^2/s): the angular momentum at the start plus what a fall
-    through the potential's amplitude gives ([T] T2); defined (> 0) for a top released at rest without spin.
-
-    Parameters are as `scales`, with ``mgh`` = M g h (J).
-    """
+    through the potential's amplitude gives ([T] T2); defined (> 0) for a top released at rest without spin."""
     return float(np.sqrt((inertia_pivot * transverse0) ** 2 + (inertia_axial * spin) ** 2 + 2 * inertia_pivot * mgh))
 
 
@@ -181,25 +153,8 @@ def step_limits(
     spin: float,
     nutations: float,
 ) -> StepLimits:
-    """The largest RK4 steps for a run of `nutations` nutation periods of the motion `top` (see RK4_TARGET).
-
-    Parameters
-    ----------
-    top : tops.HeavyTop
-        The closed form of the motion ([T] T2-T3).
-    inertia_pivot, inertia_axial : float
-        I1 about the pivot and I3 (kg m^2).
-    mgh : float
-        M g h (J).
-    tilt, tilt_rate, precession, spin : float
-        The initial state as `tops.heavy_top` takes it: theta0 (rad), theta_dot0, phi_dot0 and omega3 (rad/s).
-    nutations : float
-        The run's length in nutation periods.
-
-    Returns
-    -------
-    StepLimits
-    """
+    """The largest RK4 steps (s) by each rule of the comment on RK4_TARGET, for a run of `nutations` nutation
+    periods of the motion `top` ([T] T2-T3) from the initial state it was made from."""
     i1 = inertia_pivot
     transverse0 = float(np.hypot(tilt_rate, precession * np.sin(tilt)))
     sc = scales(top, i1, inertia_axial, spin, transverse0)
@@ -217,22 +172,9 @@ def step_limits(
 
 
 def acceleration_bound(inertia_pivot: float, inertia_axial: float, mgh: float, spin: float, transverse: float) -> float:
-    """An upper bound (rad/s^2) on the body-frame angular acceleration of the top.
-
-    ``|I1 - I3| |omega3| |omega_perp|max / I1 + M g h / I1``: Euler's equations ([T] R7) with the gravity torque
-    at its largest, M g h.
-
-    Parameters
-    ----------
-    inertia_pivot, inertia_axial : float
-        I1 about the pivot and I3 (kg m^2).
-    mgh : float
-        M g h (J).
-    spin : float
-        omega3 (rad/s).
-    transverse : float
-        |omega_perp| at its largest (rad/s), `Scales.transverse`.
-    """
+    """An upper bound (rad/s^2) on the body-frame angular acceleration, ``|I1 - I3| |omega3| |omega_perp|max / I1
+    + M g h / I1``: Euler's equations ([T] R7) with the gravity torque at its largest; `transverse` is
+    |omega_perp|max (rad/s, `Scales.transverse`)."""
     return abs(inertia_pivot - inertia_axial) * abs(spin) * transverse / inertia_pivot + mgh / inertia_pivot
 
 
@@ -273,17 +215,14 @@ def roundoff_scales(
     Parameters
     ----------
     top : tops.HeavyTop
-        The closed form of the motion ([T] T2-T3).
-    duration : float
-        The run's length (s).
-    nutations : float
-        The run's length in nutation periods.
+    duration, nutations : float
+        The run's length: in s, and in nutation periods.
     precession_rate : float
-        The precession rate the precession-rate check predicts (rad/s).
+        What the precession-rate check predicts (rad/s).
     tilt : float
         theta0 (rad).
     falling : bool
-        Whether the tilt-growth-rate check runs (a top falling from near the upright).
+        Whether the tilt-growth-rate check runs.
 
     Returns
     -------

@@ -29,7 +29,7 @@ from rigidbench.settings import MAX_ACCELERATION, round_step
 from rigidbench.simulate import Trajectory
 
 # Reference timestep (`HeavyTop.reference_settings`, `reference_run`): the largest that keeps RK4's drift of L and E
-# within RK4_TARGET and resolves the motion's rates (`rigidbench.analytic.heavy_top.step_limits`), rounded down.
+# within a target and resolves the motion's rates, rounded down (the rule: `rigidbench.analytic.heavy_top`).
 RUN_NUTATIONS = 3.3  # three full nutations: four maxima of theta
 # A top falling from near the upright (released at rest below the T6 threshold at theta0 <= FALLING_TILT, the falling
 # case) whose three nutations would take more than MAX_STEPS steps runs its first fall only: its checks need no more
@@ -226,7 +226,7 @@ class Plan:
 
 
 def plan(p: Mapping[str, Any]) -> Plan:
-    """The reference run at the parameters `p` (see the comment on RK4_TARGET).
+    """The reference run at the parameters `p` (`rigidbench.analytic.heavy_top.RK4_TARGET`).
 
     Raises
     ------
@@ -258,7 +258,7 @@ def reference_run(
 ) -> Plan:
     """The reference run of the motion `top` (its initial state as `tops.heavy_top` takes it): RUN_NUTATIONS
     nutation periods (FALL_NUTATIONS for a falling top whose three would exceed MAX_STEPS) at the step of the
-    comment on RK4_TARGET (`rigidbench.analytic.heavy_top.step_limits`)."""
+    comment on `rigidbench.analytic.heavy_top.RK4_TARGET`."""
     i1 = inertia_pivot
     falling = (
         tilt <= FALLING_TILT
