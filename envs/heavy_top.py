@@ -21,7 +21,14 @@ import numpy as np
 from rigidbench import frames, signals
 from rigidbench.analytic import heavy_top as theory
 from rigidbench.analytic import tops
-from rigidbench.analytic.heavy_top import Scales, momentum_scale, scales  # noqa: F401 (their old import path)
+from rigidbench.analytic.heavy_top import (  # noqa: F401 (their old import path)
+    RK4_TARGET,
+    SPIN_TURN,
+    UNWRAP_TURN,
+    Scales,
+    momentum_scale,
+    scales,
+)
 from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia
 from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Bound, Gravity, Numeric, Param, Range
 from rigidbench.scenario import Case, Check, Derived, Domain, Scenario
