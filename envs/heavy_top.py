@@ -19,26 +19,25 @@ import mujoco
 import numpy as np
 
 from rigidbench import frames, signals
+from rigidbench.analytic import heavy_top as theory
 from rigidbench.analytic import tops
+<<<<<<< HEAD
 from rigidbench.contract import MAX_ACCELERATION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
+=======
+from rigidbench.analytic.heavy_top import (  # noqa: F401 (their old import path)
+    RK4_TARGET,
+    SPIN_TURN,
+    UNWRAP_TURN,
+    Scales,
+    momentum_scale,
+    scales,
+)
+>>>>>>> analytic
 from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia
 from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Bound, Gravity, Numeric, Param, Range
 
-# Reference timestep (`HeavyTop.reference_settings`, `reference_run`). MuJoCo integrates the body-frame rates of the
-# ball joint, whose transverse part turns in the body frame as the body spins, and a phase error of RK4 there that
-# the quaternion does not share turns the transverse angular momentum I1 omega_perp about the axis. Over a run of T
-# that is a relative error in L (and E) of about
-#     r Omega T (Omega h)^4 / 120,   r = I1 |omega_perp|max / L_scale,   Omega = the fastest rate of the motion
-# (`Scales.fastest`: the largest |omega|, the body-frame precession |I3 - I1| |omega3| / I1, the nutation, sqrt(beta))
-# (measured: at most 0.09 of it, scaling as h^4, over 114 census draws and slow tops swinging through 2.9 rad). The
-# step keeps it at RK4_TARGET = 4e-9, 0.4 of the 1e-8 drift tolerances; it resolves the fastest rate by at least
-# 1 / SPIN_TURN = 53 steps a radian (the model file's 1e-4 s at the default spin, 150 rad/s: every rate of the motion,
-# the nutation's cubic-interpolated events included, with an RK4 phase error (Omega h)^4 / 120 <= 1e-9 a radian)
-# and the azimuth of a steady top by at most UNWRAP_TURN = 0.5 rad a step (to unwrap phi). Rounded down to one digit
-# it is the model file's 1e-4 s at the default cases (the fast-precession one: 7e-5 s, its RK4 bound).
-RK4_TARGET = 4e-9
-SPIN_TURN = 0.0188
-UNWRAP_TURN = 0.5
+# Reference timestep (`HeavyTop.reference_settings`, `reference_run`): the largest that keeps RK4's drift of L and E
+# within a target and resolves the motion's rates, rounded down (the rule: `rigidbench.analytic.heavy_top`).
 RUN_NUTATIONS = 3.3  # three full nutations: four maxima of theta
 # A top falling from near the upright (released at rest below the T6 threshold at theta0 <= FALLING_TILT, the falling
 # case) whose three nutations would take more than MAX_STEPS steps runs its first fall only: its checks need no more
@@ -221,63 +220,6 @@ def closed_form(p: Mapping[str, Any]) -> tops.HeavyTop:
 
 
 @dataclass(frozen=True)
-class Scales:
-    """Rates (rad/s) of a motion of the heavy top, over a nutation period, from the closed form (T2-T3).
-
-    Attributes
-    ----------
-    spin : float
-        |Omega_b| = |I3 - I1| |omega3| / I1: the rate at which the transverse body rates turn in the body frame
-        by themselves (Euler's equations; gravity adds a torque of the pendulum's rate, `pendulum`).
-    omega : float
-        |omega| at its largest: the body's turning rate.
-    precession : float
-        |phi_dot| at its largest.
-    nutation : float
-        2 pi / T_nut.
-    transverse : float
-        sqrt(omega1^2 + omega2^2) at its largest.
-    pendulum : float
-        sqrt(beta) = sqrt(2 M g h / I1): the rate of the gravity torque's effect.
-    """
-
-    spin: float
-    omega: float
-    precession: float
-    nutation: float
-    transverse: float
-    pendulum: float
-
-    @property
-    def fastest(self) -> float:
-        """The fastest rate of the state MuJoCo integrates (the azimuth's whirl near the vertical is not one)."""
-        return max(self.spin, self.omega, self.nutation, self.pendulum)
-
-
-def scales(top: tops.HeavyTop, inertia_pivot: float, inertia_axial: float, spin: float, transverse0: float) -> Scales:
-    """The `Scales` of the motion `top` (moments in kg m^2, spin omega3 and the initial transverse body rate
-    |omega_perp(0)| in rad/s)."""
-    w2, w1 = top.w_roots[1], top.w_roots[0]
-    w = np.linspace(w2, w1, 257)
-    # omega_perp^2 = theta_dot^2 + phi_dot^2 sin^2(theta) = alpha - beta u (energy, THEORY.md T2) = k0 + beta w
-    transverse = float(np.sqrt(max(transverse0**2 + top.beta * w1, 0.0)))
-    return Scales(
-        spin=abs(inertia_axial - inertia_pivot) * abs(spin) / inertia_pivot,
-        omega=float(np.hypot(spin, transverse)),
-        precession=float(np.max(np.abs(top.precession_rate_at_w(w)))),
-        nutation=2 * np.pi / top.nutation_period,
-        transverse=transverse,
-        pendulum=float(np.sqrt(top.beta)),
-    )
-
-
-def momentum_scale(inertia_pivot: float, inertia_axial: float, mgh: float, transverse0: float, spin: float) -> float:
-    """L_scale = sqrt(|L(0)|^2 + 2 I1 M g h) (kg m^2/s): the angular momentum at the start plus what a fall through
-    the potential's amplitude gives; defined (> 0) for a top released at rest without spin."""
-    return float(np.sqrt((inertia_pivot * transverse0) ** 2 + (inertia_axial * spin) ** 2 + 2 * inertia_pivot * mgh))
-
-
-@dataclass(frozen=True)
 class Plan:
     """The reference run of a parameter set: closed form, scales, step (s), duration (s) and steps."""
 
@@ -292,7 +234,7 @@ class Plan:
 
 
 def plan(p: Mapping[str, Any]) -> Plan:
-    """The reference run at the parameters `p` (see the comment on RK4_TARGET).
+    """The reference run at the parameters `p` (`rigidbench.analytic.heavy_top.RK4_TARGET`).
 
     Raises
     ------
@@ -324,15 +266,8 @@ def reference_run(
 ) -> Plan:
     """The reference run of the motion `top` (its initial state as `tops.heavy_top` takes it): RUN_NUTATIONS
     nutation periods (FALL_NUTATIONS for a falling top whose three would exceed MAX_STEPS) at the step of the
-    comment on RK4_TARGET."""
+    comment on `rigidbench.analytic.heavy_top.RK4_TARGET`."""
     i1 = inertia_pivot
-    transverse0 = float(np.hypot(tilt_rate, precession * np.sin(tilt)))
-    sc = scales(top, i1, inertia_axial, spin, transverse0)
-    r = min(1.0, i1 * sc.transverse / momentum_scale(i1, inertia_axial, mgh, transverse0, spin))
-    omega = sc.fastest
-    # phi is unwrapped only for a steady top (its precession rate is a slope); a nutating one's mean precession counts
-    # whole turns from the prediction, and need not follow the azimuth's whirl near the vertical
-    steady = tilt_rate == 0 and top.w_roots[0] - top.w_roots[1] < 1e-12
     falling = (
         tilt <= FALLING_TILT
         and tilt_rate == 0
@@ -340,23 +275,21 @@ def reference_run(
         and abs(spin) < tops.sleeping_threshold(i1, inertia_axial, mgh)
     )
     for nutations in (RUN_NUTATIONS, FALL_NUTATIONS) if falling else (RUN_NUTATIONS,):
-        duration = nutations * top.nutation_period
-        by_rk4 = (120 * RK4_TARGET / (max(r, 1e-300) * omega**5 * duration)) ** 0.25
-        by_resolution = SPIN_TURN / omega
-        by_unwrap = UNWRAP_TURN / sc.precession if steady and sc.precession > 0 else np.inf
-        limits = {"RK4 drift": by_rk4, "resolution": by_resolution, "azimuth unwrap": by_unwrap}
-        which = min(limits, key=limits.get)
-        h = round_step(limits[which])
-        if duration / h <= MAX_STEPS:
+        limits = theory.step_limits(
+            top,
+            inertia_pivot,
+            inertia_axial,
+            mgh,
+            tilt=tilt,
+            tilt_rate=tilt_rate,
+            precession=precession,
+            spin=spin,
+            nutations=nutations,
+        )
+        h = round_step(limits.step)
+        if limits.duration / h <= MAX_STEPS:
             break
-    rule = (
-        f"min((120 x {RK4_TARGET:g} / (r Omega^5 T))^(1/4), {SPIN_TURN:g} / Omega, {UNWRAP_TURN:g} / "
-        f"|phi_dot| if steady) with r = I1 |omega_perp|max / L_scale = {r:.3g}, Omega = max(|omega|max, "
-        f"|I3 - I1| |omega3| / I1, omega_nut, sqrt(beta)) = {omega:.4g} rad/s, T = {nutations:g} T_nut = "
-        f"{duration:.4g} s: min({by_rk4:.4g}, {by_resolution:.4g}, {by_unwrap:.4g}) s ({which}), rounded down to "
-        f"one digit: {h:.1g} s"
-    )
-    return Plan(top, sc, Derived(h, rule), duration)
+    return Plan(top, limits.scales, Derived(h, limits.rule(h)), limits.duration)
 
 
 def _plan_or_none(p: Mapping[str, Any]) -> Plan | None:
@@ -386,7 +319,7 @@ def _run_length(p: Mapping[str, Any]) -> str | None:
 
 
 # The body-frame angular acceleration of the top is at most |I1 - I3| |omega3| |omega_perp|max / I1 + M g h / I1
-# (Euler's equations, THEORY.md R7, with the gravity torque); refused above settings.MAX_ACCELERATION (mjMAXVAL / 10).
+# (`rigidbench.analytic.heavy_top.acceleration_bound`); refused above settings.MAX_ACCELERATION (mjMAXVAL / 10).
 
 
 def _acceleration(p: Mapping[str, Any]) -> str | None:
@@ -394,8 +327,7 @@ def _acceleration(p: Mapping[str, Any]) -> str | None:
     pl = _plan_or_none(p)
     if pl is None:
         return None
-    i1 = _pivot_inertia(p)
-    bound = abs(i1 - p["I3"]) * abs(p["spin"]) * pl.scales.transverse / i1 + _mgh(p) / i1
+    bound = theory.acceleration_bound(_pivot_inertia(p), p["I3"], _mgh(p), p["spin"], pl.scales.transverse)
     if not bound <= MAX_ACCELERATION:
         return f"{_where(p, *_ALL_NAMES)} (angular accelerations up to {bound:.3g} rad/s^2)"
     return None
@@ -885,50 +817,16 @@ class HeavyTop(Scenario):
 
 
 def _roundoff_scales(prediction: Mapping[str, Any], duration: float) -> dict[str, float]:
-    """The float32 round-off scales of the checks whose quantity is small against what float32 rounds
-    (`Scenario.roundoff_scale`; theta-min, theta-max and max-tilt-linear take the generic rule for a small angle:
-    float32 keeps the axis to an absolute ~eps rad per step, its quaternion's numbers being O(1), a random walk of
-    eps sqrt(N) rad over the run; measured on Warp and MJX float32 at spins of 1.7e3-9.2e3 rad/s, theta's extrema
-    were off by 0.5-1.0 eps sqrt(N) rad). Never below 1, the relative floor of any quantity. In units of one radian
-    of that noise:
-
-    * a rate read from an angle's advance over the run (mean-precession, the steady precession-rate) is as precise
-      as the advance, |phi_dot| T rad, and phi is the azimuth of the axis, which the axis' noise moves by noise /
-      sin(theta): scale 1 / (|phi_dot| T sin(theta)), theta where phi is read (the steady top's tilt; for the mean
-      precession the family of extremes farther from its pole, `_mean_precession`) (measured 1.0-1.7
-      eps sqrt(N) / (|phi_dot| T) on a looping and a slow steady top: a top spinning 2e5 times faster than it
-      precesses moved 2.6e-3 rad in the run; a Warp census draw tilted 0.0257 rad, without the sin(theta), was
-      9.0e-2 off against a floor of 4.6e-2, 20 units of eps sqrt(N) / (|phi_dot| T) where 1 / sin(theta) = 39);
-    * the precession at a turning point, phi_dot = (b - a u) / (1 - u^2), is a difference of terms of size
-      |b| + |a u|, each known to float32's relative noise (a = I3 omega3 / I1 and b = p_phi / I1 are the spin's
-      and the vertical momentum's): scale (|b| + |a u|) / |b - a u|, large where the top loops (b ~ a u). An upper
-      bound: the dynamics keeps the two noises correlated, and on four looping tops the errors measured were
-      0.0002-0.13 of it, so a float32 census reports these checks unresolved more often than it must;
-    * the nutation period is a phase's advance, 2 pi n_nut nutations of amplitude theta_max - theta_min: the axis'
-      noise moves the phase by noise / amplitude (measured 0.13-0.22 of that; a fast top nutates by 1e-4 rad, a few
-      times the noise);
-    * the falling top's growth rate is a slope of ln(theta) fitted from theta = 20 theta0 up, where the noise is
-      1 / (20 theta0) of theta, over ln(5) of ln(theta).
-    """
-    scales: dict[str, float] = {}
-    # where phi is read: the extremes farther from their pole (a steady top's theta-min = theta-max = its tilt)
-    sin_theta = max(math.sin(float(prediction["theta-min"])), math.sin(float(prediction["theta-max"])))
-    for name in ("mean-precession", "precession-rate"):
-        rate = abs(float(prediction.get(name, 0.0)))
-        if rate > 0:  # at a pole the azimuth is not defined at all: an infinite scale, unresolved on float32
-            scales[name] = max(1.0, 1.0 / (rate * duration * sin_theta)) if sin_theta > 0 else math.inf
-    top = prediction["_theory"]
-    for name, u in (("precession-at-theta-min", top.roots[1]), ("precession-at-theta-max", top.roots[0])):
-        difference = abs(top.b - top.a * u)
-        if difference > 0:
-            scales[name] = max(1.0, (abs(top.b) + abs(top.a * u)) / difference)
-    amplitude = float(prediction["theta-max"] - prediction["theta-min"])
-    if amplitude > 0:
-        phase = 2 * math.pi * float(prediction["_run_nutations"])
-        scales["nutation-period"] = max(1.0, 1.0 / (amplitude * phase))
-    if "tilt-growth-rate" in prediction:
-        scales["tilt-growth-rate"] = max(1.0, 1.0 / (20 * float(prediction["_tilt0"]) * math.log(5.0)))
-    return scales
+    """The float32 round-off scales of the checks (`Scenario.roundoff_scale`), from the closed form
+    (`rigidbench.analytic.heavy_top.roundoff_scales`)."""
+    return theory.roundoff_scales(
+        prediction["_theory"],
+        duration=duration,
+        nutations=prediction["_run_nutations"],
+        precession_rate=prediction["precession-rate"],
+        tilt=prediction["_tilt0"],
+        falling="tilt-growth-rate" in prediction,
+    )
 
 
 def _axis_at(t: np.ndarray, e3_W: np.ndarray, at: np.ndarray) -> np.ndarray:

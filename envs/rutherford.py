@@ -525,17 +525,12 @@ class Rutherford(Scenario):
         t_half = coulomb.time_at_separation(float(model.numeric("separation").data[0]) * rmin, b_close, d, u)
         data.qpos[:] = model.qpos0
         data.qvel[:] = 0.0
-        cm_velocity = np.array([m1 * u / mass, 0.0, 0.0])
-        r, v = coulomb.relative_orbit(-t_half, b, d, u)  # every pair at once, in its own scattering plane
-        c, sn = np.cos(azimuth), np.sin(azimuth)  # the plane turned by the azimuth about the beam (x)
-        r = np.stack([r[:, 0], c * r[:, 1] - sn * r[:, 2], sn * r[:, 1] + c * r[:, 2]], axis=1)
-        v = np.stack([v[:, 0], c * v[:, 1] - sn * v[:, 2], sn * v[:, 1] + c * v[:, 2]], axis=1)
-        centre = -t_half * cm_velocity  # the CM passes the origin at the closest approach
+        x1, v1, x2, v2 = coulomb.lab_pair_states(-t_half, b, azimuth, (m1, m2), d, u)
         q3 = np.arange(3)
-        data.qpos[pr["projectile_q"][:, None] + q3] = centre + (m2 / mass) * r
-        data.qpos[pr["target_q"][:, None] + q3] = centre - (m1 / mass) * r
-        data.qvel[pr["projectile_v"][:, None] + q3] = cm_velocity + (m2 / mass) * v
-        data.qvel[pr["target_v"][:, None] + q3] = cm_velocity - (m1 / mass) * v
+        data.qpos[pr["projectile_q"][:, None] + q3] = x1
+        data.qpos[pr["target_q"][:, None] + q3] = x2
+        data.qvel[pr["projectile_v"][:, None] + q3] = v1
+        data.qvel[pr["target_v"][:, None] + q3] = v2
 
     # ---- prediction -------------------------------------------------------------------------------------------
 
@@ -794,18 +789,8 @@ class Rutherford(Scenario):
 
 
 def beam_bins(min_angle: float, mass_ratio: float) -> dict[str, np.ndarray]:
-    """Bin edges (rad) of the beam's three goodness-of-fit tests: equal probability in theta; equal widths in psi
-    over [psi(theta_min), psi_top] (from 0 for m1 > m2, whose short branch sends near-head-on collisions to psi -> 0)
-    and in zeta over [0, (pi - theta_min) / 2] (the top edge is the largest angle; `bin_counts` closes the top bin,
-    so the head-on pair's psi = pi or zeta = 0 counts)."""
-    x = mass_ratio
-    psi_low = float(scattering.lab_angles(min_angle, x)[0]) if x <= 1 else 0.0
-    psi_top = scattering.max_lab_angle(x) if x > 1 else (np.pi / 2 if x == 1 else np.pi)
-    return {
-        "cm": coulomb.equal_probability_edges(NBINS, min_angle),
-        "projectile": np.linspace(min(psi_low, psi_top), psi_top, NBINS + 1),
-        "target": np.linspace(0.0, 0.5 * (np.pi - min_angle), NBINS + 1),
-    }
+    """Bin edges (rad) of the beam's three goodness-of-fit tests, NBINS each (`coulomb.beam_bins`)."""
+    return coulomb.beam_bins(min_angle, mass_ratio, NBINS)
 
 
 def _slow_projectile(p: Mapping[str, Any]) -> str | None:
@@ -818,23 +803,8 @@ def _slow_projectile(p: Mapping[str, Any]) -> str | None:
 
 
 def _invariants(s: Mapping[str, np.ndarray], m1: float, m2: float, kappa: float) -> dict[str, np.ndarray]:
-    """Per pair, from its state (`Rutherford.split`): relative r and rdot, the speed at infinity v = sqrt(rdot^2 +
-    2 kappa / r) (energy; kappa = k / mu), the impact parameter |r x rdot| / v (angular momentum), D = kappa / v^2,
-    the energy per reduced mass v^2 / 2, and the total momentum m1 v1 + m2 v2."""
-    r = s["x1"] - s["x2"]
-    rdot = s["v1"] - s["v2"]
-    dist = np.linalg.norm(r, axis=-1)
-    v2 = np.einsum("...i,...i", rdot, rdot) + 2 * kappa / dist
-    speed = np.sqrt(v2)
-    return {
-        "r": r,
-        "rdot": rdot,
-        "speed": speed,
-        "b": np.linalg.norm(np.cross(r, rdot), axis=-1) / speed,
-        "distance": kappa / v2,
-        "energy": 0.5 * v2,
-        "momentum": m1 * s["v1"] + m2 * s["v2"],
-    }
+    """Per pair, from its state (`Rutherford.split`): `coulomb.pair_invariants`."""
+    return coulomb.pair_invariants(s["x1"], s["v1"], s["x2"], s["v2"], (m1, m2), kappa)
 
 
 def _angle(v: np.ndarray, w: np.ndarray) -> np.ndarray:
