@@ -36,11 +36,8 @@ import numpy as np
 
 from rigidbench import signals
 from rigidbench.analytic import gyrocompass as gc
-<<<<<<< HEAD
-from rigidbench.contract import UNRESOLVED_FRACTION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
-=======
 from rigidbench.analytic.gyrocompass import Geometry, gyroscopic_roundoff  # noqa: F401 (their old import path)
->>>>>>> analytic
+from rigidbench.contract import UNRESOLVED_FRACTION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.envs.pendulums import frequency
 from rigidbench.envs.rotor import require_rigid_body_inertia

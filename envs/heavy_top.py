@@ -21,9 +21,6 @@ import numpy as np
 from rigidbench import frames, signals
 from rigidbench.analytic import heavy_top as theory
 from rigidbench.analytic import tops
-<<<<<<< HEAD
-from rigidbench.contract import MAX_ACCELERATION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
-=======
 from rigidbench.analytic.heavy_top import (  # noqa: F401 (their old import path)
     RK4_TARGET,
     SPIN_TURN,
@@ -32,7 +29,7 @@ from rigidbench.analytic.heavy_top import (  # noqa: F401 (their old import path
     momentum_scale,
     scales,
 )
->>>>>>> analytic
+from rigidbench.contract import MAX_ACCELERATION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia
 from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Bound, Gravity, Numeric, Param, Range
 
