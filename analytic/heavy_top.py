@@ -1,10 +1,11 @@
-"""The heavy top's rates, reference step, largest acceleration and float32 round-off scales, from its closed form
-(`rigidbench.analytic.tops.heavy_top`, docs/theory.md T2-T3); the scenario (`rigidbench.envs.heavy_top`) picks the
-run's length and rounds the step. Pure numpy functions of SI values; nothing here imports mujoco (house rule 2).
+"""The heavy (Lagrange) top on a fixed pivot: its closed form (`heavy_top`, docs/theory.md T1-T7), and from it the
+rates, reference step, largest acceleration and float32 round-off scales; the scenario (`rigidbench.envs.heavy_top`)
+picks the run's length and rounds the step. Pure numpy functions of SI values; nothing here imports mujoco (house
+rule 2).
 
 Conventions (docs/theory.md section 0, as `rigidbench.analytic.tops`): ``inertia_pivot`` = I1 + M h^2 about the pivot
 (R4) and ``inertia_axial`` = I3 (kg m^2); ``mgh`` = M g h (J); ``spin`` = omega3, every rate in rad/s; the initial
-state (tilt, tilt_rate, precession, spin) as `tops.heavy_top` takes it. References: [W] Wilcox, *Modern
+state (tilt, tilt_rate, precession, spin) as `heavy_top` takes it. References: [W] Wilcox, *Modern
 Introductory Mechanics Part II*, section 11.10 (seed 000); [T] docs/theory.md T2-T3 (heavy top), R7 (Euler).
 """
 
@@ -15,7 +16,269 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigidbench.analytic import tops
+from rigidbench import lazy
+
+special = lazy.module("scipy.special")
+
+# ---------------------------------------------------------------------------------------------------------
+# Heavy symmetric top on a fixed pivot (THEORY.md T1-T7; Wilcox section 11.10)
+# ---------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class HeavyTop:
+    """The Lagrange top reduced to u = cos(theta) ([T] T2, T3).
+
+    theta is measured from the upward vertical; I1 is the transverse moment about the pivot. The cubic is
+    solved in w = u0 - u (u0 = cos(theta0)), which keeps its coefficients free of cancellation when the top
+    is nearly upright (all three roots then crowd near u = 1).
+
+    Attributes
+    ----------
+    a, beta : float
+        a = I3 omega3 / I1 (1/s); beta = 2 M g h / I1 (1/s^2).
+        u_dot^2 = f(u) = (1 - u^2)(alpha - beta u) - (b - a u)^2 = beta (u - u1)(u - u2)(u - u3), b = p_phi / I1.
+    c : float
+        b - a u0 = phi_dot0 sin^2(theta0) (1/s), kept as formed from the initial state: b itself (the property
+        `b`) is c + a u0, and b - a u0 computed from it would cancel to the digits of a u0 that c lacks (near the
+        inverted or upright top with a slow precession, a u0 >> c).
+    u0 : float
+        cos(theta0) at t = 0.
+    w_roots : tuple of float
+        w1 >= w2 >= w3 with u_i = u0 - w_i, i.e. u1 <= u2 <= u3: theta nutates between arccos(u2) (theta_min)
+        and arccos(u1) (theta_max); u3 >= 1.
+    nutation_period : float
+        T_nut = 4 K(k) / sqrt(beta (u3 - u1)) (s), k^2 = (u2 - u1)/(u3 - u1) ([T] T3).
+    t_max_tilt : float
+        A time (s) at which u = u1 (theta largest): u(t) = u1 + (u2 - u1) sn^2(nu (t - t_max_tilt), k).
+    mean_precession_rate : float
+        Delta phi / T_nut (rad/s): phi_dot = (b - a u)/(1 - u^2) over one period, in closed form (elliptic integrals
+        of the third kind, `_mean_precession_rate`).
+    """
+
+    a: float
+    c: float
+    beta: float
+    u0: float
+    sin2_tilt: float
+    w_roots: tuple[float, float, float]
+    nutation_period: float
+    t_max_tilt: float
+    mean_precession_rate: float = float("nan")
+
+    @property
+    def b(self) -> float:
+        """b = p_phi / I1 = c + a u0 (1/s) ([T] T2)."""
+        return self.c + self.a * self.u0
+
+    @property
+    def roots(self) -> tuple[float, float, float]:
+        """u1 <= u2 <= u3."""
+        return tuple(self.u0 - w for w in self.w_roots)
+
+    def theta_at_w(self, w: float | np.ndarray) -> float | np.ndarray:
+        """theta (rad) at u = u0 - w (scalar or array)."""
+        # sin^2(theta) = 1 - u^2 = sin^2(theta0) + 2 u0 w - w^2, without cancellation near theta = 0
+        w = np.asarray(w, dtype=float)
+        theta = np.arctan2(np.sqrt(np.maximum(self.sin2_tilt + 2 * self.u0 * w - w * w, 0.0)), self.u0 - w)
+        return float(theta) if theta.ndim == 0 else theta
+
+    @property
+    def theta_min(self) -> float:
+        return self.theta_at_w(self.w_roots[1])
+
+    @property
+    def theta_max(self) -> float:
+        return self.theta_at_w(self.w_roots[0])
+
+    def precession_rate_at_w(self, w: np.ndarray) -> np.ndarray:
+        """phi_dot = (b - a u)/(1 - u^2) (rad/s) at u = u0 - w ([T] T2).
+
+        Evaluated as (c + a w) / (sin^2(theta0) + 2 u0 w - w^2), with c = b - a u0 kept from the initial state
+        and 1 - u^2 expanded about u0: no term cancels that the state itself does not make cancel, so the
+        relative error is a few ulps times the conditioning of the sums c + a w and 1 - u^2 (test:
+        `test_precession_rate_at_w_keeps_its_digits_near_the_inverted_top`).
+        """
+        w = np.asarray(w, dtype=float)
+        return (self.c + self.a * w) / (self.sin2_tilt + 2 * self.u0 * w - w * w)
+
+    def w(self, t: np.ndarray) -> np.ndarray:
+        """u0 - u(t) at times `t` (s) ([T] T3)."""
+        w1, w2, w3 = self.w_roots
+        nu = 0.5 * np.sqrt(self.beta * (w1 - w3))
+        m = (w1 - w2) / (w1 - w3)
+        sn = special.ellipj(nu * (np.asarray(t, dtype=float) - self.t_max_tilt), m)[0]
+        return w1 - (w1 - w2) * sn**2
+
+    def u(self, t: np.ndarray) -> np.ndarray:
+        """u = cos(theta) at times `t` (s) ([T] T3)."""
+        return self.u0 - self.w(t)
+
+
+def _polish_roots(coeffs: np.ndarray) -> np.ndarray:
+    roots = np.sort(np.roots(coeffs).real)
+    deriv = np.polyder(coeffs)
+    for _ in range(3):  # Newton steps; the roots of a nutating top are simple
+        d = np.polyval(deriv, roots)
+        safe = np.where(d != 0, d, 1.0)
+        roots = roots - np.where(d != 0, np.polyval(coeffs, roots) / safe, 0.0)
+    return np.sort(roots)
+
+
+def heavy_top(
+    inertia_pivot: float,
+    inertia_axial: float,
+    mgh: float,
+    *,
+    tilt: float,
+    tilt_rate: float,
+    precession: float,
+    spin: float,
+) -> HeavyTop:
+    """Solve the heavy symmetric top from its state at t = 0.
+
+    Parameters
+    ----------
+    inertia_pivot : float
+        I1 (kg m^2), transverse moment about the pivot (= I_perp,cm + M h^2, THEORY.md R4).
+    inertia_axial : float
+        I3 (kg m^2).
+    mgh : float
+        M g h (J): mass times gravity times pivot-to-CM distance.
+    tilt, tilt_rate : float
+        theta0 (rad, from the upward vertical) and theta_dot0 (rad/s).
+    precession : float
+        phi_dot0 (rad/s).
+    spin : float
+        omega3 = psi_dot + phi_dot cos(theta) (rad/s), conserved.
+
+    Raises
+    ------
+    ValueError
+        If mgh <= 0 (the reduction needs gravity and an offset CM) or the tilt is not in (0, pi).
+
+    Notes
+    -----
+    With w = u0 - u, c = b - a u0 = phi_dot0 sin^2(theta0) and alpha - beta u = k0 + beta w, where
+    k0 = theta_dot0^2 + phi_dot0^2 sin^2(theta0) (the transverse body rates squared),
+    f = (sin^2 theta0 + 2 u0 w - w^2)(k0 + beta w) - (c + a w)^2
+      = -beta w^3 + (2 u0 beta - k0 - a^2) w^2 + (beta sin^2 theta0 + 2 u0 k0 - 2 a c) w + (k0 sin^2 theta0 - c^2).
+    """
+    if mgh <= 0:
+        raise ValueError(f"mgh = {mgh} J must be positive")
+    if not 0 < tilt < np.pi:
+        raise ValueError(f"tilt = {tilt} rad must be in (0, pi)")
+    i1 = float(inertia_pivot)
+    a = inertia_axial * spin / i1
+    beta = 2 * mgh / i1
+    u0, s2 = float(np.cos(tilt)), float(np.sin(tilt) ** 2)
+    k0 = tilt_rate**2 + precession**2 * s2
+    c = precession * s2
+    coeffs = np.array([-beta, 2 * u0 * beta - k0 - a * a, beta * s2 + 2 * u0 * k0 - 2 * a * c, k0 * s2 - c * c])
+    if tilt_rate == 0:
+        # theta0 is a turning point: w = 0 is an exact root (k0 s2 = c^2). Deflate and solve the quadratic
+        # stably, so that a (nearly) double root at 0, i.e. (nearly) steady precession, stays exact.
+        qa, qb, qc = coeffs[:3]
+        disc = max(qb * qb - 4 * qa * qc, 0.0)
+        q = -0.5 * (qb + np.copysign(np.sqrt(disc), qb))
+        w3, w2, w1 = sorted([0.0, q / qa, qc / q if q != 0 else 0.0])
+    else:
+        w3, w2, w1 = _polish_roots(coeffs)  # ascending w = descending u
+    w1, w2 = max(w1, 0.0), min(w2, 0.0)  # u0 lies in [u1, u2]; round-off can put it a hair outside
+    nu = 0.5 * np.sqrt(beta * (w1 - w3))
+    m = (w1 - w2) / (w1 - w3)
+    # K(m) = K(1 - m1), m1 = (w2 - w3)/(w1 - w3) formed without cancellation: a top released near the upright
+    # has m within 1e-9 of 1, where 1 - m in double precision would lose half its digits.
+    period = 2 * special.ellipkm1((w2 - w3) / (w1 - w3)) / nu
+    # phase: w(0) = 0 with w(t) = w1 - (w1 - w2) sn^2(nu (t - t1)); u = u0 - w rises (w falls) just after t1.
+    r = 1.0 if w1 == w2 else float(np.clip(w1 / (w1 - w2), 0.0, 1.0))
+    offset = special.ellipkinc(np.arcsin(np.sqrt(r)), m) / nu
+    u0_dot = -np.sin(tilt) * tilt_rate
+    t1 = -offset if u0_dot >= 0 else offset
+    mean_rate = _mean_precession_rate(a, c, u0, s2, w1, w2, w3)
+    return HeavyTop(a, c, beta, u0, s2, (w1, w2, w3), float(period), float(t1), mean_rate)
+
+
+def _mean_precession_rate(a: float, c: float, u0: float, s2: float, w1: float, w2: float, w3: float) -> float:
+    """Delta phi / T_nut (rad/s) over one nutation period, in closed form ([T] T3).
+
+    phi_dot = (b - a u)/(1 - u^2) = A+ / (1 - u) + A- / (1 + u), A+- = (b -+ a)/2, and with u = u1 + (u2 - u1)
+    sn^2(nu t, k) each term integrates over a period 2K / nu to a complete elliptic integral of the third kind:
+
+        Delta phi / T_nut = [A+ Pi(n+ | m) / (1 - u1) + A- Pi(n- | m) / (1 + u1)] / K(m),
+        n+ = (u2 - u1) / (1 - u1),  n- = -(u2 - u1) / (1 + u1),  m = k^2,
+
+    Pi(n | m) = R_F(0, 1 - m, 1) + (n / 3) R_J(0, 1 - m, 1, 1 - n) (Carlson; DLMF 19.25.2). Unlike a quadrature in t
+    it keeps its accuracy where the axis passes near a pole and phi_dot spikes to ~|omega_perp| / theta there
+    (a trapezoid rule on 4096 points missed such a spike by 1e-2 of the rate). Every difference is formed from
+    w = u0 - u and 1 -+ u0 without cancellation: 1 - u_i = (1 - u0) + w_i, 1 + u_i = (1 + u0) - w_i.
+    """
+    one_minus_u0, one_plus_u0 = (s2 / (1 + u0), 1 + u0) if u0 > 0 else (1 - u0, s2 / (1 - u0))
+    a_plus = 0.5 * (c - a * one_minus_u0)  # (b - a) / 2, b = c + a u0
+    a_minus = 0.5 * (c + a * one_plus_u0)  # (b + a) / 2
+    spread = w1 - w2  # u2 - u1
+    m1 = (w2 - w3) / (w1 - w3)  # 1 - m
+    terms = 0.0
+    for amplitude, gap1, gap2, sign in (
+        (a_plus, one_minus_u0 + w1, one_minus_u0 + w2, 1.0),  # 1 - u1, 1 - u2
+        (a_minus, one_plus_u0 - w1, one_plus_u0 - w2, -1.0),  # 1 + u1, 1 + u2
+    ):
+        if amplitude == 0:
+            continue
+        n = sign * spread / gap1
+        pi_n = special.elliprf(0.0, m1, 1.0) + n / 3 * special.elliprj(0.0, m1, 1.0, gap2 / gap1)  # 1 - n
+        terms += amplitude * pi_n / gap1
+    return float(terms / special.ellipkm1(m1))
+
+
+def steady_precession_rates(
+    inertia_pivot: float, inertia_axial: float, mgh: float, spin: float, tilt: float
+) -> tuple[float, float]:
+    """Slow and fast steady-precession rates phi_dot (rad/s) at fixed tilt ([T] T4, [W] prob. 11.18).
+
+    Roots of I1 cos(theta0) phi_dot^2 - I3 omega3 phi_dot + M g h = 0, written so the slow root stays accurate
+    as cos(theta0) -> 0: slow = 2 M g h / (I3 omega3 + sqrt(D)), fast = (I3 omega3 + sqrt(D)) / (2 I1 cos theta0),
+    D = I3^2 omega3^2 - 4 I1 M g h cos(theta0). The fast root is infinite at theta0 = pi/2.
+
+    Raises
+    ------
+    ValueError
+        If D < 0: no steady precession at this tilt and spin (above the horizontal the spin must exceed
+        sqrt(4 I1 M g h cos(theta0)) / I3).
+    """
+    p = inertia_axial * spin
+    c = np.cos(tilt)
+    disc = p * p - 4 * inertia_pivot * mgh * c
+    if disc < 0:
+        need = np.sqrt(4 * inertia_pivot * mgh * c) / inertia_axial
+        raise ValueError(
+            f"no steady precession at tilt = {tilt:g} rad with spin = {spin:g} rad/s; needs spin >= {need:g} rad/s"
+        )
+    root = p + np.copysign(np.sqrt(disc), p)
+    slow = 2 * mgh / root
+    fast = root / (2 * inertia_pivot * c) if c != 0 else np.inf
+    return float(slow), float(fast)
+
+
+def sleeping_threshold(inertia_pivot: float, inertia_axial: float, mgh: float) -> float:
+    """Smallest spin omega3 (rad/s) for which the upright top is stable: I3 omega3 = 2 sqrt(I1 M g h) ([T] T6)."""
+    return float(2 * np.sqrt(inertia_pivot * mgh) / inertia_axial)
+
+
+def sleeping_max_tilt(inertia_pivot: float, inertia_axial: float, mgh: float, spin: float, tilt: float) -> float:
+    """Linearised largest tilt (rad) of a top above threshold released at rest from a small tilt ([T] T6).
+
+    theta_max = theta0 (s+ + s-)/(s+ - s-) = theta0 I3 omega3 / sqrt(I3^2 omega3^2 - 4 I1 M g h).
+    Relative error O(theta0^2) from the linearisation.
+    """
+    p = inertia_axial * spin
+    return float(tilt * p / np.sqrt(p * p - 4 * inertia_pivot * mgh))
+
+
+def falling_growth_rate(inertia_pivot: float, inertia_axial: float, mgh: float, spin: float) -> float:
+    """gamma = sqrt(4 I1 M g h - I3^2 omega3^2) / (2 I1) (1/s): tilt growth below threshold ([T] T6)."""
+    return float(np.sqrt(4 * inertia_pivot * mgh - (inertia_axial * spin) ** 2) / (2 * inertia_pivot))
+
 
 # Reference timestep (`step_limits`). MuJoCo integrates the body-frame rates of the ball joint, whose transverse
 # part turns in the body frame as the body spins, and a phase error of RK4 there that the quaternion does not share
@@ -69,7 +332,7 @@ class Scales:
         return max(self.spin, self.omega, self.nutation, self.pendulum)
 
 
-def scales(top: tops.HeavyTop, inertia_pivot: float, inertia_axial: float, spin: float, transverse0: float) -> Scales:
+def scales(top: HeavyTop, inertia_pivot: float, inertia_axial: float, spin: float, transverse0: float) -> Scales:
     """The `Scales` of the motion `top` ([T] T2-T3), its initial transverse body rate |omega_perp(0)| being
     `transverse0` (rad/s)."""
     w2, w1 = top.w_roots[1], top.w_roots[0]
@@ -142,7 +405,7 @@ class StepLimits:
 
 
 def step_limits(
-    top: tops.HeavyTop,
+    top: HeavyTop,
     inertia_pivot: float,
     inertia_axial: float,
     mgh: float,
@@ -179,7 +442,7 @@ def acceleration_bound(inertia_pivot: float, inertia_axial: float, mgh: float, s
 
 
 def roundoff_scales(
-    top: tops.HeavyTop,
+    top: HeavyTop,
     *,
     duration: float,
     nutations: float,
@@ -214,7 +477,7 @@ def roundoff_scales(
 
     Parameters
     ----------
-    top : tops.HeavyTop
+    top : HeavyTop
     duration, nutations : float
         The run's length: in s, and in nutation periods.
     precession_rate : float

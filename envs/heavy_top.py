@@ -1,7 +1,7 @@
 """Heavy symmetric top on a fixed frictionless pivot (Lagrange top): the MuJoCo side, and its gymnasium env.
 
 Theory: THEORY.md T1-T7 (Wilcox Part II section 11.10, eqs 11.52-11.62; prob. 11.13, 11.18), implemented in
-`rigidbench.analytic.tops`. Model: ``models/heavy_top.xml`` (a ball joint at the world origin; body z is the
+`rigidbench.analytic.heavy_top`. Model: ``models/heavy_top.xml`` (a ball joint at the world origin; body z is the
 symmetry axis; the CM at ``arm`` on it).
 
 Conventions: theta from the upward vertical, so U = M g h cos(theta); z-x-z Euler angles with phi = psi = 0
@@ -20,7 +20,6 @@ import numpy as np
 
 from rigidbench import frames, signals
 from rigidbench.analytic import heavy_top as theory
-from rigidbench.analytic import tops
 from rigidbench.analytic.heavy_top import (  # noqa: F401 (their old import path)
     RK4_TARGET,
     SPIN_TURN,
@@ -191,21 +190,21 @@ def _mgh(p: Mapping[str, Any]) -> float:
 
 
 def _threshold(p: Mapping[str, Any]) -> float:
-    return tops.sleeping_threshold(_pivot_inertia(p), p["I3"], _mgh(p))
+    return theory.sleeping_threshold(_pivot_inertia(p), p["I3"], _mgh(p))
 
 
 def _steady(p: Mapping[str, Any], root: int) -> float:
     """The T4 root (0: slow, 1: fast), or 0 where there is none: the steady cases' spin regime refuses those."""
     try:
-        rate = tops.steady_precession_rates(_pivot_inertia(p), p["I3"], _mgh(p), p["spin"], p["tilt"])[root]
+        rate = theory.steady_precession_rates(_pivot_inertia(p), p["I3"], _mgh(p), p["spin"], p["tilt"])[root]
     except ValueError:  # I3^2 omega3^2 < 4 I1 M g h cos(theta0)
         return 0.0
     return rate if math.isfinite(rate) else 0.0
 
 
-def closed_form(p: Mapping[str, Any]) -> tops.HeavyTop:
+def closed_form(p: Mapping[str, Any]) -> theory.HeavyTop:
     """The T2-T3 closed form at the parameters (the prediction uses the state MuJoCo holds, equal to round-off)."""
-    return tops.heavy_top(
+    return theory.heavy_top(
         _pivot_inertia(p),
         p["I3"],
         _mgh(p),
@@ -220,7 +219,7 @@ def closed_form(p: Mapping[str, Any]) -> tops.HeavyTop:
 class Plan:
     """The reference run of a parameter set: closed form, scales, step (s), duration (s) and steps."""
 
-    top: tops.HeavyTop
+    top: theory.HeavyTop
     scales: Scales
     step: Derived
     duration: float
@@ -251,7 +250,7 @@ def plan(p: Mapping[str, Any]) -> Plan:
 
 
 def reference_run(
-    top: tops.HeavyTop,
+    top: theory.HeavyTop,
     inertia_pivot: float,
     inertia_axial: float,
     mgh: float,
@@ -261,7 +260,7 @@ def reference_run(
     precession: float,
     spin: float,
 ) -> Plan:
-    """The reference run of the motion `top` (its initial state as `tops.heavy_top` takes it): RUN_NUTATIONS
+    """The reference run of the motion `top` (its initial state as `theory.heavy_top` takes it): RUN_NUTATIONS
     nutation periods (FALL_NUTATIONS for a falling top whose three would exceed MAX_STEPS) at the step of the
     comment on `rigidbench.analytic.heavy_top.RK4_TARGET`."""
     i1 = inertia_pivot
@@ -269,7 +268,7 @@ def reference_run(
         tilt <= FALLING_TILT
         and tilt_rate == 0
         and precession == 0
-        and abs(spin) < tops.sleeping_threshold(i1, inertia_axial, mgh)
+        and abs(spin) < theory.sleeping_threshold(i1, inertia_axial, mgh)
     )
     for nutations in (RUN_NUTATIONS, FALL_NUTATIONS) if falling else (RUN_NUTATIONS,):
         limits = theory.step_limits(
@@ -369,7 +368,7 @@ def _linear_max_tilt(p: Mapping[str, Any]) -> str | None:
     top = _plan_or_none(p)
     if top is None:
         return None
-    linear = tops.sleeping_max_tilt(i1, i3, mgh, p["spin"], p["tilt"])
+    linear = theory.sleeping_max_tilt(i1, i3, mgh, p["spin"], p["tilt"])
     error = abs(linear / top.top.theta_max - 1)
     if not error <= LINEAR_ERROR:
         return f"{_where(p, 'tilt', 'spin')} (the linear max tilt is {error:.2g} off the exact root of T2)"
@@ -702,7 +701,7 @@ class HeavyTop(Scenario):
         tilt = float(np.arctan2(s, R[2, 2]))
         tilt_rate = float((w1 * R[2, 1] - w2 * R[2, 0]) / s)
         phi_dot0 = float((w1 * R[2, 0] + w2 * R[2, 1]) / (s * s))
-        top = tops.heavy_top(i1, i3, mgh, tilt=tilt, tilt_rate=tilt_rate, precession=phi_dot0, spin=float(spin))
+        top = theory.heavy_top(i1, i3, mgh, tilt=tilt, tilt_rate=tilt_rate, precession=phi_dot0, spin=float(spin))
         steady = tilt_rate == 0 and (top.w_roots[0] - top.w_roots[1]) < 1e-12
         transverse0 = float(np.hypot(w1, w2))
         out = {
@@ -729,11 +728,11 @@ class HeavyTop(Scenario):
             "_tolerance": {"theta-min": self.check("theta-min").tolerance * max(1.0, THETA_FLOOR / top.theta_min)},
         }
         if (i3 * spin) ** 2 > 4 * i1 * mgh:
-            out["max-tilt-linear"] = tops.sleeping_max_tilt(i1, i3, mgh, spin, tilt)
+            out["max-tilt-linear"] = theory.sleeping_max_tilt(i1, i3, mgh, spin, tilt)
         else:
-            out["tilt-growth-rate"] = tops.falling_growth_rate(i1, i3, mgh, spin)
+            out["tilt-growth-rate"] = theory.falling_growth_rate(i1, i3, mgh, spin)
         if steady:
-            slow, fast = tops.steady_precession_rates(i1, i3, mgh, spin, tilt)
+            slow, fast = theory.steady_precession_rates(i1, i3, mgh, spin, tilt)
             out["precession-rate"] = slow if abs(phi_dot0 - slow) <= abs(phi_dot0 - fast) else fast
         out["_roundoff_scale"] = _roundoff_scales(out, self.duration(out))
         return out
