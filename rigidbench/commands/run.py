@@ -29,6 +29,11 @@ def arguments(sub) -> None:
     )
     p.add_argument("--junit", metavar="PATH", help="write the results as JUnit XML")
     shared.quiet_argument(p)
+    p.add_argument(
+        "--brief",
+        action="store_true",
+        help="print only the rows that did not pass (failed, diverged, unresolved, crashed) and the summary line",
+    )
     shared.jobs_argument(p, "cases simulated at once, on threads")
 
 
@@ -71,8 +76,10 @@ def main(args: argparse.Namespace) -> int:
         write(args, rows, completion)
         return result.interrupted.status
     out = shared.human(args.json, args.junit)
-    print(results.table(rows), file=out)
-    print(file=out)
+    shown = [r for r in rows if r["status"] not in (results.PASS, results.UNSUPPORTED)] if args.brief else rows
+    if shown or not args.brief:
+        print(results.table(shown), file=out)
+        print(file=out)
     if rows:
         elapsed = time.perf_counter() - t0
         s = rows[0]["settings"]
