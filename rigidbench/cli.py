@@ -93,7 +93,8 @@ def main(argv: Sequence[str] | None = None, *, last: bool = False) -> int:
         if isinstance(exc, Interrupted):
             print(f"rigidbench: interrupted by {exc.name}", file=sys.stderr)
             return exc.status
-        if isinstance(exc, UsageError) or _is_one_line(exc):
+        # SystemExit (--help, --version, argparse's usage errors) is passed on without importing the error types
+        if isinstance(exc, UsageError) or isinstance(exc, Exception) and _is_one_line(exc):
             print(f"rigidbench: error: {exc}", file=sys.stderr)
             return EXIT_USAGE
         raise
