@@ -323,3 +323,124 @@ def lab_log_drift(cm_angle: float, masses: tuple[float, float], distance: float)
     m1, m2 = masses
     psi, _ = scattering.lab_angles(cm_angle, m1 / m2)
     return float(-(m2 / (m1 + m2)) * distance * np.sin(cm_angle - psi))
+
+
+# ---- a pair in the LAB frame: its state on the exact orbit, its invariants, the beam's bins ------------------
+
+
+def lab_pair_states(
+    time: float,
+    impact_parameter: ArrayLike,
+    azimuth: ArrayLike,
+    masses: tuple[float, float],
+    distance: float,
+    speed: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """LAB positions and velocities of pairs on their exact orbits at `time` (s) from the closest approach
+    (docs/theory.md C7; conventions of the module docstring).
+
+    The beam is along +x, the target at rest at t = -inf; each pair's scattering plane is the x-y plane turned by
+    its `azimuth` (rad) about x; the CM moves at (m1 v / M, 0, 0) and passes the origin at t = 0.
+
+    Parameters
+    ----------
+    time : float
+        t (s), negative before the closest approach.
+    impact_parameter, azimuth : array_like, shape (n,)
+        b (m) and the plane's azimuth (rad) of each pair.
+    masses : tuple of float
+        (m1, m2) (kg): projectile, target.
+    distance : float
+        D = k / (mu v^2) (m).
+    speed : float
+        v (m/s), the projectile's speed at infinity.
+
+    Returns
+    -------
+    x1, v1, x2, v2 : ndarray, shape (n, 3)
+        Projectile and target positions (m) and velocities (m/s).
+    """
+    m1, m2 = masses
+    mass = m1 + m2
+    cm_velocity = np.array([m1 * speed / mass, 0.0, 0.0])
+    r, v = relative_orbit(time, impact_parameter, distance, speed)  # every pair at once, in its own scattering plane
+    c, sn = np.cos(azimuth), np.sin(azimuth)  # the plane turned by the azimuth about the beam (x)
+    r = np.stack([r[:, 0], c * r[:, 1] - sn * r[:, 2], sn * r[:, 1] + c * r[:, 2]], axis=1)
+    v = np.stack([v[:, 0], c * v[:, 1] - sn * v[:, 2], sn * v[:, 1] + c * v[:, 2]], axis=1)
+    centre = time * cm_velocity  # the CM passes the origin at the closest approach
+    return (
+        centre + (m2 / mass) * r,
+        cm_velocity + (m2 / mass) * v,
+        centre - (m1 / mass) * r,
+        cm_velocity - (m1 / mass) * v,
+    )
+
+
+def pair_invariants(
+    x1: np.ndarray, v1: np.ndarray, x2: np.ndarray, v2: np.ndarray, masses: tuple[float, float], kappa: float
+) -> dict[str, np.ndarray]:
+    """What a pair's state fixes of its whole Coulomb orbit (docs/theory.md C7): energy and angular momentum.
+
+    Parameters
+    ----------
+    x1, v1, x2, v2 : ndarray, shape (..., 3)
+        Projectile and target positions (m) and velocities (m/s), LAB frame.
+    masses : tuple of float
+        (m1, m2) (kg).
+    kappa : float
+        k / mu (m^3/s^2).
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``r``, ``rdot``: the relative position and velocity; ``speed``: the speed at infinity v = sqrt(rdot^2 + 2
+        kappa / r) (energy); ``b``: the impact parameter |r x rdot| / v (angular momentum); ``distance``: D =
+        kappa / v^2; ``energy``: the energy per reduced mass v^2 / 2; ``momentum``: m1 v1 + m2 v2.
+    """
+    m1, m2 = masses
+    r = x1 - x2
+    rdot = v1 - v2
+    dist = np.linalg.norm(r, axis=-1)
+    v_sq = np.einsum("...i,...i", rdot, rdot) + 2 * kappa / dist
+    speed = np.sqrt(v_sq)
+    return {
+        "r": r,
+        "rdot": rdot,
+        "speed": speed,
+        "b": np.linalg.norm(np.cross(r, rdot), axis=-1) / speed,
+        "distance": kappa / v_sq,
+        "energy": 0.5 * v_sq,
+        "momentum": m1 * v1 + m2 * v2,
+    }
+
+
+def beam_bins(min_angle: float, mass_ratio: float, nbins: int) -> dict[str, np.ndarray]:
+    """Bin edges (rad) of a beam's three goodness-of-fit tests (docs/theory.md C6, C7).
+
+    Equal probability in theta (`equal_probability_edges`); equal widths in psi over [psi(theta_min), psi_top]
+    (from 0 for m1 > m2, whose short branch sends near-head-on collisions to psi -> 0) and in zeta over
+    [0, (pi - theta_min) / 2] (the top edge is the largest angle, which a histogram should close, so that the
+    head-on pair's psi = pi or zeta = 0 counts).
+
+    Parameters
+    ----------
+    min_angle : float
+        theta_min (rad), the smallest CM angle of the beam.
+    mass_ratio : float
+        x = m1 / m2.
+    nbins : int
+        Bins per test.
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``cm``, ``projectile``, ``target``: edges, shape (nbins + 1,) each.
+    """
+    x = mass_ratio
+    psi_low = float(scattering.lab_angles(min_angle, x)[0]) if x <= 1 else 0.0
+    psi_top = scattering.max_lab_angle(x) if x > 1 else (np.pi / 2 if x == 1 else np.pi)
+    return {
+        "cm": equal_probability_edges(nbins, min_angle),
+        "projectile": np.linspace(min(psi_low, psi_top), psi_top, nbins + 1),
+        "target": np.linspace(0.0, 0.5 * (np.pi - min_angle), nbins + 1),
+    }

@@ -29,6 +29,7 @@ References
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -258,3 +259,128 @@ def platform_momentum_swing(
     transverse = inertia_transverse * abs(omega) * cl * cl * np.sin(min(a, np.pi / 2)) ** 2
     tilt = 2 * (inertia_transverse + inertia_gimbal) * abs(sl) * abs(max_rate)
     return float(axial + transverse + tilt)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The compass as built: its moments and the platform axis' latitude; rates, round-off and sensitivity of a run
+# ---------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The gyrocompass as compiled: moments (kg m^2) and the platform axis' latitude ([T] G1).
+
+    Attributes
+    ----------
+    inertia_axial, inertia_transverse : float
+        The rotor's moments about its spin axis and about a transverse axis (its CM).
+    inertia_gimbal : float
+        The gimbal's moment about its (vertical) hinge axis.
+    inertia_platform : float
+        The platform's moment about its axis n.
+    latitude : float
+        asin(n . up) (rad).
+    horizontal : float
+        |n - (n . up) up| = cos(lat): Omega_perp / Omega.
+    north : float
+        The gimbal angle (rad) at which the spin axis lies along the horizontal part of n: the equilibrium for H > 0.
+    """
+
+    inertia_axial: float
+    inertia_transverse: float
+    inertia_gimbal: float
+    inertia_platform: float
+    latitude: float
+    horizontal: float
+    north: float
+
+
+def axes_geometry(platform_axis: np.ndarray, up: np.ndarray, spin0: np.ndarray) -> tuple[float, float, float]:
+    """Latitude, horizontal fraction and North of the compass from its axes ([T] section 0, "Earth frames", G1).
+
+    Parameters
+    ----------
+    platform_axis : ndarray, shape (3,)
+        The platform's hinge axis n in the platform frame (any length).
+    up : ndarray, shape (3,)
+        The unit local vertical in the platform frame (the gimbal's hinge axis, pointing up).
+    spin0 : ndarray, shape (3,)
+        The rotor's unit spin axis at zero gimbal angle, in the platform frame.
+
+    Returns
+    -------
+    latitude : float
+        asin(n . up) (rad).
+    horizontal : float
+        |n_h| = cos(lat), n_h = n - (n . up) up.
+    north : float
+        The gimbal angle (rad, towards East = -up x spin0) at which the spin axis lies along n_h.
+    """
+    east0 = np.cross(-up, spin0)
+    n = platform_axis / np.linalg.norm(platform_axis)  # the platform's axis in its own frame (East, North, Up)
+    sin_lat = float(np.dot(n, up))
+    n_h = n - sin_lat * up
+    return (
+        float(np.arcsin(np.clip(sin_lat, -1.0, 1.0))),
+        float(np.linalg.norm(n_h)),
+        float(np.arctan2(np.dot(n_h, east0), np.dot(n_h, spin0))),
+    )
+
+
+def fastest_rate(theory: Gyrocompass, amplitude: float) -> float:
+    """The hunting's fastest rate (rad/s): omega_g, or the azimuth's rate through North if larger ([T] G1).
+
+    Parameters
+    ----------
+    theory : Gyrocompass
+        The closed form.
+    amplitude : float
+        The turning angle (rad).
+    """
+    return max(theory.hunting_frequency, theory.max_rate(amplitude))
+
+
+def gyroscopic_roundoff(spin_rate: float, omega_perp: float, amplitude: float) -> float:
+    """rho = eps |chi'| / (|Omega_perp| sin|a|): the relative double-precision error of a simulator's gyroscopic
+    torque against the restoring torque H Omega_perp sin(a) of a hunting of turning angle a ([T] G1).
+
+    A gyroscopic torque computed in world axes from a spin chi' far faster than the platform carries a round-off
+    ~eps I chi'^2, against the restoring torque I_a chi' Omega_perp sin(a).
+
+    Parameters
+    ----------
+    spin_rate : float
+        chi' (rad/s).
+    omega_perp : float
+        Omega cos(lat) (rad/s).
+    amplitude : float
+        The turning angle a (rad).
+
+    Returns
+    -------
+    float
+        rho (dimensionless), inf where sin(a) = 0.
+    """
+    sine = math.sin(min(abs(amplitude), math.pi))
+    return float(np.finfo(float).eps) * abs(spin_rate) / (abs(omega_perp) * sine) if sine > 0 else math.inf
+
+
+def period_sensitivity(theory: Gyrocompass, amplitude: float) -> float:
+    """S = |d ln T / d ln a|: the hunting period's sensitivity to the turning angle a ([T] G1), by a central
+    difference of `Gyrocompass.period` over a +- 1e-4 a; ~a^2/8 small, ~5 at a = 3 (the separatrix at pi); 0 at
+    a = 0.
+
+    Parameters
+    ----------
+    theory : Gyrocompass
+        The closed form.
+    amplitude : float
+        The turning angle a (rad).
+    """
+    da = 1e-4 * abs(amplitude)
+    return (
+        abs(math.log(theory.period(abs(amplitude) + da) / theory.period(abs(amplitude) - da)))
+        / math.log((abs(amplitude) + da) / (abs(amplitude) - da))
+        if da > 0
+        else 0.0
+    )

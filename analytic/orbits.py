@@ -15,6 +15,7 @@ Every quantity is in SI units; vectors are 3-vectors in the world (LAB) frame.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -294,3 +295,42 @@ def launch_eccentricity(law: str, speed_ratio: float) -> float:
     if law == "kepler":
         return abs(s * s - 1.0)
     return float(np.sqrt(1.0 - min(s, 1.0 / s) ** 2))
+
+
+def launch_pericentre(mu: float, k: float, separation: float, speed_ratio: float) -> tuple[float, float]:
+    """Pericentre distance r_p (m) and speed v_p (m/s) of the Kepler orbit `launch` starts (docs/theory.md K2).
+
+    ``r0`` is the pericentre for s >= 1 (speed s v_c there, v_c = sqrt(k / (mu r0))); the apocentre for s < 1,
+    with ``r_p = r0 s^2 / (2 - s^2)``; ``v_p = s v_c r0 / r_p`` (angular momentum). r_p / v_p (s) is the orbit's
+    fastest time scale.
+
+    Parameters
+    ----------
+    mu : float
+        Reduced mass (kg).
+    k : float
+        Strength of the attraction U = -k / r (N m^2), > 0.
+    separation : float
+        r0 (m), the launch apsis.
+    speed_ratio : float
+        s, the launch speed over the circular speed at r0; bound for s < sqrt(2).
+
+    Returns
+    -------
+    r_p, v_p : float
+    """
+    r0, s = separation, speed_ratio
+    circular = math.sqrt(k / (mu * r0))
+    r_p = r0 if s >= 1 else r0 * s * s / (2.0 - s * s)
+    return r_p, s * circular * r0 / r_p
+
+
+def lab_states(
+    m1: float, m2: float, r: np.ndarray, v: np.ndarray, cm_velocity: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """LAB positions and velocities x1, x2, v1, v2 of the two bodies from the relative state (r, v) and the CM's
+    velocity, the CM at the origin (docs/theory.md K1, K3): ``x1 = (m2 / M) r``, ``x2 = -(m1 / M) r``,
+    ``v1 = V + (m2 / M) v``, ``v2 = V - (m1 / M) v``; masses in kg, r in m, v and V in m/s.
+    """
+    total = m1 + m2
+    return m2 / total * r, -m1 / total * r, cm_velocity + m2 / total * v, cm_velocity - m1 / total * v

@@ -208,46 +208,13 @@ class ScenarioEnv(gym.Env):
         ``data.time`` on, so an episode may start at t > 0.
         """
 
-    # ---- batched hooks (`rigidbench.envs.vector`): the same four, for N copies' states at once ----------------
+    # ---- batched hooks ------------------------------------------------------------------------------------
     #
-    # The defaults run the single-state hooks above once per copy (through a scratch MjData for the state and the
-    # inputs), so every env works batched; a family overrides them with array code doing the same arithmetic in the
-    # same order, so a batched env equals N single envs bit for bit (tests/test_vector.py).
-
-    def observe_batch(self, worlds) -> np.ndarray:
-        """Observations of every copy, shape (nworld, obs_dim), from ``worlds.qpos``, ``worlds.qvel``,
-        ``worlds.time`` (`rigidbench.engines.Worlds`)."""
-        out = np.empty((worlds.nworld, *self.observation_space.shape))
-        with self._scratch() as data:
-            for i in range(worlds.nworld):
-                data.qpos[:], data.qvel[:], data.time = worlds.qpos[i], worlds.qvel[i], worlds.time[i]
-                out[i] = self.observe()
-        return out
-
-    def apply_actions(self, actions: np.ndarray, worlds) -> None:
-        """Write every copy's (clipped) action, shape (nworld, *action_shape), into ``worlds.ctrl``,
-        ``worlds.qfrc_applied`` or ``worlds.xfrc_applied``."""
-        with self._scratch() as data:
-            for i in range(worlds.nworld):
-                data.ctrl[:], data.qfrc_applied[:], data.xfrc_applied[:] = (
-                    worlds.ctrl[i],
-                    worlds.qfrc_applied[i],
-                    worlds.xfrc_applied[i],
-                )
-                self.apply_action(actions[i])
-                worlds.ctrl[i], worlds.qfrc_applied[i], worlds.xfrc_applied[i] = (
-                    data.ctrl,
-                    data.qfrc_applied,
-                    data.xfrc_applied,
-                )
-
-    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
-        """`measured` of every row of `obs`, shape (nworld, len(observables))."""
-        return np.array([np.asarray(self.measured(row), dtype=float) for row in obs]).reshape(len(obs), -1)
-
-    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        """`deviation` of every copy, shape (nworld,), from (nworld, len(observables)) arrays."""
-        return np.array([self.deviation(m, p) for m, p in zip(measured.tolist(), predicted.tolist(), strict=True)])
+    # A batched vector env (`rigidbench.envs.vector`) asks for the same four hooks for N copies' states at once:
+    # ``observe_batch(worlds)``, ``apply_actions(actions, worlds)``, ``measured_batch(obs)``,
+    # ``deviation_batch(measured, predicted)``. An env that does not define them gets per-copy fallbacks that run the
+    # hooks above once per copy (`rigidbench.envs.vector.PerCopyHooks`); a family defines them with array code doing
+    # the same arithmetic in the same order, so a batched env equals N single envs bit for bit (tests/test_vector.py).
 
     @contextlib.contextmanager
     def _scratch(self):

@@ -30,10 +30,10 @@ import numpy as np
 
 from rigidbench import shards
 from rigidbench.analytic import scattering
-from rigidbench.contact import MIN_STEPS
+from rigidbench.contact import MIN_STEPS, ContactSteps
 from rigidbench.contract import UNRESOLVED_FRACTION, Case, Check, Scenario
 from rigidbench.envs.hard_spheres import HardSpheres, stiffness_param
-from rigidbench.params import Bound, ContactSteps, Numeric, Param, Range
+from rigidbench.params import Bound, Numeric, Param, Range
 from rigidbench.simulate import STATE, final_states, get_state, initial_states
 
 # Free flight before the contact (steps), so the kink of the force at entry falls on a step boundary.

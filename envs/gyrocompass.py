@@ -36,6 +36,7 @@ import numpy as np
 
 from rigidbench import signals
 from rigidbench.analytic import gyrocompass as gc
+from rigidbench.analytic.gyrocompass import Geometry, gyroscopic_roundoff  # noqa: F401 (their old import path)
 from rigidbench.contract import UNRESOLVED_FRACTION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.envs.pendulums import frequency
@@ -175,9 +176,7 @@ def _theory(p: Mapping[str, Any]) -> gc.Gyrocompass:
     return gc.Gyrocompass(p["I_transverse"], p["I_gimbal"], h, omega_perp)
 
 
-def _omega_max(theory: gc.Gyrocompass, amplitude: float) -> float:
-    """The hunting's fastest rate (rad/s): omega_g, or the azimuth's rate through North if larger."""
-    return max(theory.hunting_frequency, theory.max_rate(amplitude))
+_omega_max = gc.fastest_rate
 
 
 def _swing(theory: gc.Gyrocompass, omega: float, latitude: float, amplitude: float) -> float:
@@ -203,13 +202,6 @@ def _north_seeking(p: Mapping[str, Any]) -> str | None:
         f"(H = {theory.spin_momentum:.4g} kg m^2/s against I_t Omega cos(lat) = "
         f"{theory.inertia_transverse * theory.omega_perp:.4g} kg m^2/s)"
     )
-
-
-def gyroscopic_roundoff(spin_rate: float, omega_perp: float, amplitude: float) -> float:
-    """rho (see `ROUNDOFF`): the relative double-precision error of MuJoCo's gyroscopic torque against the restoring
-    torque of a hunting of turning angle `amplitude` (rad)."""
-    sine = math.sin(min(abs(amplitude), math.pi))
-    return float(np.finfo(float).eps) * abs(spin_rate) / (abs(omega_perp) * sine) if sine > 0 else math.inf
 
 
 def _roundoff(p: Mapping[str, Any]) -> str | None:
@@ -435,15 +427,8 @@ class GyroCompass(Scenario):
         predicted_drift = float(np.abs(along - along[0]).max() / (g.inertia_platform * abs(omega)))
         nstep = round(RUN_PERIODS * period / model.opt.timestep)
         rho = gyroscopic_roundoff(float(data.qvel[j.rotor_v]), omega_perp, amplitude)
-        # The hunting period's sensitivity to the amplitude (and so to the energy the round-off moves), S = |d ln T /
-        # d ln a| from the quadrature: ~a^2/8 small, ~5 at a = 3 (the separatrix at pi).
-        da = 1e-4 * abs(amplitude)
-        sensitivity = (
-            abs(math.log(theory.period(abs(amplitude) + da) / theory.period(abs(amplitude) - da)))
-            / math.log((abs(amplitude) + da) / (abs(amplitude) - da))
-            if da > 0
-            else 0.0
-        )
+        # The hunting period's sensitivity to the amplitude (and so to the energy the round-off moves)
+        sensitivity = gc.period_sensitivity(theory, amplitude)
         scale = {"hunting-period": max(1.0, sensitivity)}
         floor = {name: gain_ * rho * scale.get(name, 1.0) for name, gain_ in ROUNDOFF_GAINS.items()}
         return {
@@ -519,35 +504,6 @@ def mean_over_periods(t: np.ndarray, alpha: np.ndarray) -> float:
     return float(CubicSpline(t, alpha).integrate(up[0], up[-1]) / (up[-1] - up[0]))
 
 
-@dataclass(frozen=True)
-class Geometry:
-    """The gyrocompass as compiled: moments (kg m^2) and the platform axis' latitude.
-
-    Attributes
-    ----------
-    inertia_axial, inertia_transverse : float
-        The rotor's moments about its spin axis and about a transverse axis (its CM).
-    inertia_gimbal : float
-        The gimbal's moment about its (vertical) hinge axis.
-    inertia_platform : float
-        The platform's moment about its axis n.
-    latitude : float
-        asin(n . up) (rad).
-    horizontal : float
-        |n - (n . up) up| = cos(lat): Omega_perp / Omega.
-    north : float
-        The gimbal angle (rad) at which the spin axis lies along the horizontal part of n: the equilibrium for H > 0.
-    """
-
-    inertia_axial: float
-    inertia_transverse: float
-    inertia_gimbal: float
-    inertia_platform: float
-    latitude: float
-    horizontal: float
-    north: float
-
-
 def _moment(model: mujoco.MjModel, body: int, axis_body: np.ndarray) -> float:
     """Moment of inertia (kg m^2) of `body` about the unit axis `axis_body` (body frame) through its CM."""
     frame = np.empty(9)
@@ -572,10 +528,7 @@ def geometry(model: mujoco.MjModel) -> Geometry:
     q_g, q_r = model.body_quat[gimbal], model.body_quat[rotor]
     up = -_rotate(q_g, axis[GIMBAL])  # the gimbal turns about -up: its angle is the azimuth towards East
     spin0 = _rotate(q_g, _rotate(q_r, axis[ROTOR]))  # the spin axis at zero gimbal angle
-    east0 = np.cross(-up, spin0)
-    n = axis[PLATFORM] / np.linalg.norm(axis[PLATFORM])  # the platform's axis in its own frame (East, North, Up)
-    sin_lat = float(np.dot(n, up))
-    n_h = n - sin_lat * up
+    latitude, horizontal, north = gc.axes_geometry(axis[PLATFORM], up, spin0)
     spin_local = axis[ROTOR] / np.linalg.norm(axis[ROTOR])
     trans = np.cross(spin_local, np.eye(3)[np.argmin(np.abs(spin_local))])
     trans /= np.linalg.norm(trans)
@@ -600,9 +553,9 @@ def geometry(model: mujoco.MjModel) -> Geometry:
         inertia_transverse=i_t1,
         inertia_gimbal=_moment(model, gimbal, gimbal_axis),
         inertia_platform=_moment(model, platform, axis[PLATFORM]),
-        latitude=float(np.arcsin(np.clip(sin_lat, -1.0, 1.0))),
-        horizontal=float(np.linalg.norm(n_h)),
-        north=float(np.arctan2(np.dot(n_h, east0), np.dot(n_h, spin0))),
+        latitude=latitude,
+        horizontal=horizontal,
+        north=north,
     )
 
 

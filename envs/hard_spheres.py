@@ -23,10 +23,10 @@ import mujoco
 import numpy as np
 
 from rigidbench.analytic import scattering
-from rigidbench.contact import MIN_STEPS, ContactSpring, contact_spring, elastic_contact
+from rigidbench.contact import MIN_STEPS, ContactSpring, ContactStiffness, contact_spring, elastic_contact
 from rigidbench.contract import MAX_ACCELERATION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
 from rigidbench.envs.pair import FreePairEnv
-from rigidbench.params import BodyMass, Bound, ContactStiffness, GeomSize, Numeric, Param, Range
+from rigidbench.params import BodyMass, Bound, GeomSize, Numeric, Param, Range
 from rigidbench.simulate import final_states, initial_states, simulate
 
 # Steps of free flight before the spheres touch: the contact begins on a step boundary (the force's kink at

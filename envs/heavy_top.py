@@ -1,7 +1,7 @@
 """Heavy symmetric top on a fixed frictionless pivot (Lagrange top): the MuJoCo side, and its gymnasium env.
 
 Theory: THEORY.md T1-T7 (Wilcox Part II section 11.10, eqs 11.52-11.62; prob. 11.13, 11.18), implemented in
-`rigidbench.analytic.tops`. Model: ``models/heavy_top.xml`` (a ball joint at the world origin; body z is the
+`rigidbench.analytic.heavy_top`. Model: ``models/heavy_top.xml`` (a ball joint at the world origin; body z is the
 symmetry axis; the CM at ``arm`` on it).
 
 Conventions: theta from the upward vertical, so U = M g h cos(theta); z-x-z Euler angles with phi = psi = 0
@@ -12,39 +12,65 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from rigidbench import frames, signals
-from rigidbench.analytic import tops
-from rigidbench.contract import MAX_ACCELERATION, Case, Check, Derived, Domain, Scenario, Trajectory, round_step
+from rigidbench.analytic import heavy_top as theory
+from rigidbench.analytic.heavy_top import (  # noqa: F401 (their old import path)
+    RK4_TARGET,
+    SPIN_TURN,
+    UNWRAP_TURN,
+    Scales,
+    momentum_scale,
+    scales,
+)
+from rigidbench.contract import Case, Check, Derived, Scenario, Trajectory
+from rigidbench.envs.heavy_top_domain import (  # noqa: F401 (also their old import path)
+    _ALL_NAMES,
+    _AT_REST,
+    _FAST_SPIN,
+    _OFF_VERTICAL,
+    _OFF_VERTICAL_WHY,
+    _STEADY_SPIN,
+    _ZERO,
+    DOMAINS,
+    FALL_NUTATIONS,
+    FALLING_TILT,
+    FAST_TILT,
+    LINEAR_ERROR,
+    MAX_STEPS,
+    MIN_ADVANCE,
+    OMEGA_C_MAX,
+    RATE_RANGE,
+    RHO_MAX,
+    RUN_NUTATIONS,
+    SIGMA_MIN,
+    SLEEPING_TILT,
+    THETA_FLOOR,
+    Plan,
+    _acceleration,
+    _advancing,
+    _falling,
+    _linear_max_tilt,
+    _mgh,
+    _pivot_inertia,
+    _plan_or_none,
+    _run_length,
+    _spin_bound,
+    _steady,
+    _steady_by_derivation,
+    _threshold,
+    _where,
+    closed_form,
+    plan,
+    reference_run,
+)
 from rigidbench.envs.rotor import RotorEnv, RotorMotion, require_rigid_body_inertia
 from rigidbench.params import BodyComOffset, BodyInertia, BodyMass, Bound, Gravity, Numeric, Param, Range
 
-# Reference timestep (`HeavyTop.reference_settings`, `reference_run`). MuJoCo integrates the body-frame rates of the
-# ball joint, whose transverse part turns in the body frame as the body spins, and a phase error of RK4 there that
-# the quaternion does not share turns the transverse angular momentum I1 omega_perp about the axis. Over a run of T
-# that is a relative error in L (and E) of about
-#     r Omega T (Omega h)^4 / 120,   r = I1 |omega_perp|max / L_scale,   Omega = the fastest rate of the motion
-# (`Scales.fastest`: the largest |omega|, the body-frame precession |I3 - I1| |omega3| / I1, the nutation, sqrt(beta))
-# (measured: at most 0.09 of it, scaling as h^4, over 114 census draws and slow tops swinging through 2.9 rad). The
-# step keeps it at RK4_TARGET = 4e-9, 0.4 of the 1e-8 drift tolerances; it resolves the fastest rate by at least
-# 1 / SPIN_TURN = 53 steps a radian (the model file's 1e-4 s at the default spin, 150 rad/s: every rate of the motion,
-# the nutation's cubic-interpolated events included, with an RK4 phase error (Omega h)^4 / 120 <= 1e-9 a radian)
-# and the azimuth of a steady top by at most UNWRAP_TURN = 0.5 rad a step (to unwrap phi). Rounded down to one digit
-# it is the model file's 1e-4 s at the default cases (the fast-precession one: 7e-5 s, its RK4 bound).
-RK4_TARGET = 4e-9
-SPIN_TURN = 0.0188
-UNWRAP_TURN = 0.5
-RUN_NUTATIONS = 3.3  # three full nutations: four maxima of theta
-# A top falling from near the upright (released at rest below the T6 threshold at theta0 <= FALLING_TILT, the falling
-# case) whose three nutations would take more than MAX_STEPS steps runs its first fall only: its checks need no more
-# (the growth window and the first maximum, at T_nut / 2), and the way back up takes as long again.
-FALL_NUTATIONS = 0.6
-MAX_STEPS = 1_000_000
 _RK4 = (
     "RK4 with the step of reference_settings: drift of L and E <= r Omega T (Omega h)^4 / 120 <= 4e-9, errors of "
     "theta and phi of the same order; Omega h <= 0.0188, events cubic-interpolated to ~(Omega h)^4 / 384 <~ 3e-10"
@@ -53,27 +79,15 @@ _EXTREMA = (
     " (the axis at each extremum of theta, at the zero crossings of u_dot, its components cubic-interpolated: an "
     "absolute error ~(Omega h)^4 / 384 rad, also where the axis passes near the vertical and theta(t) has a corner)"
 )
-# theta_min is checked relative to itself down to THETA_FLOOR (rad), and in absolute terms (1e-6 x THETA_FLOOR) below:
-# an axis passing within THETA_FLOOR of the vertical is located to (Omega h)^4 / 384 <= 3.3e-10 rad (SPIN_TURN), not
-# to a fraction of its distance from the vertical.
-THETA_FLOOR = 1e-3
 _DRIFT = (
     "RK4 is not symplectic: drift <= r Omega T (Omega h)^4 / 120 <= 4e-9 at the reference step (the rule above; "
     "measured <= 0.09 of the bound), round-off <~ 1e-13 over <= 1e6 steps; 1e-8 leaves a factor 2.5 over the bound"
 )
-# The linearised sleeping top (T6): released at rest from theta0 it tilts to theta0 (s+ + s-)/(s+ - s-) up to
-# O(theta0^2). At 1.5x the threshold spin the problem in units of a = I3 omega3 / I1 depends only on theta0 (beta /
-# a^2 = 2/9), and the exact cubic (T2) puts the relative error at 0.147 theta0^2: theta0 <= 0.026 rad keeps it below
-# 1e-4, a tenth of the check's tolerance (domain 'linear-max-tilt' computes it exactly for any spin).
-SLEEPING_TILT = 0.026
-LINEAR_ERROR = 1e-4
 _LINEAR = (
     "linearised in theta (T6): relative error 0.147 theta0^2 at 1.5x the threshold spin, <= 1e-4 in the case's "
     "regime (theta0 <= 0.026 rad; the domain 'linear-max-tilt' computes it exactly from the cubic T2)"
 )
-# The falling top (T6): ln(theta) is fitted over theta in [20, 100] theta0, where the nonlinear terms O(theta^2)
-# are <= (100 theta0)^2 <= 1e-4 for theta0 <= 1e-4 rad.
-FALLING_TILT = 1e-4
+
 
 CHECKS = (
     Check(
@@ -184,385 +198,6 @@ CHECKS = (
 _CONSERVED = ("energy-drift", "p-phi-drift", "p-psi-drift")
 _NUTATION = ("theta-min", "theta-max", "nutation-period", "mean-precession", *_CONSERVED)
 _STEADY = ("tilt-deviation", "precession-rate", *_CONSERVED)
-
-
-def _pivot_inertia(p: Mapping[str, Any]) -> float:
-    return p["I1"] + p["mass"] * p["arm"] ** 2  # parallel axes, THEORY.md R4
-
-
-def _mgh(p: Mapping[str, Any]) -> float:
-    return p["mass"] * p["g"] * p["arm"]
-
-
-def _threshold(p: Mapping[str, Any]) -> float:
-    return tops.sleeping_threshold(_pivot_inertia(p), p["I3"], _mgh(p))
-
-
-def _steady(p: Mapping[str, Any], root: int) -> float:
-    """The T4 root (0: slow, 1: fast), or 0 where there is none: the steady cases' spin regime refuses those."""
-    try:
-        rate = tops.steady_precession_rates(_pivot_inertia(p), p["I3"], _mgh(p), p["spin"], p["tilt"])[root]
-    except ValueError:  # I3^2 omega3^2 < 4 I1 M g h cos(theta0)
-        return 0.0
-    return rate if math.isfinite(rate) else 0.0
-
-
-def closed_form(p: Mapping[str, Any]) -> tops.HeavyTop:
-    """The T2-T3 closed form at the parameters (the prediction uses the state MuJoCo holds, equal to round-off)."""
-    return tops.heavy_top(
-        _pivot_inertia(p),
-        p["I3"],
-        _mgh(p),
-        tilt=p["tilt"],
-        tilt_rate=p["nutation_rate"],
-        precession=p["precession"],
-        spin=p["spin"],
-    )
-
-
-@dataclass(frozen=True)
-class Scales:
-    """Rates (rad/s) of a motion of the heavy top, over a nutation period, from the closed form (T2-T3).
-
-    Attributes
-    ----------
-    spin : float
-        |Omega_b| = |I3 - I1| |omega3| / I1: the rate at which the transverse body rates turn in the body frame
-        by themselves (Euler's equations; gravity adds a torque of the pendulum's rate, `pendulum`).
-    omega : float
-        |omega| at its largest: the body's turning rate.
-    precession : float
-        |phi_dot| at its largest.
-    nutation : float
-        2 pi / T_nut.
-    transverse : float
-        sqrt(omega1^2 + omega2^2) at its largest.
-    pendulum : float
-        sqrt(beta) = sqrt(2 M g h / I1): the rate of the gravity torque's effect.
-    """
-
-    spin: float
-    omega: float
-    precession: float
-    nutation: float
-    transverse: float
-    pendulum: float
-
-    @property
-    def fastest(self) -> float:
-        """The fastest rate of the state MuJoCo integrates (the azimuth's whirl near the vertical is not one)."""
-        return max(self.spin, self.omega, self.nutation, self.pendulum)
-
-
-def scales(top: tops.HeavyTop, inertia_pivot: float, inertia_axial: float, spin: float, transverse0: float) -> Scales:
-    """The `Scales` of the motion `top` (moments in kg m^2, spin omega3 and the initial transverse body rate
-    |omega_perp(0)| in rad/s)."""
-    w2, w1 = top.w_roots[1], top.w_roots[0]
-    w = np.linspace(w2, w1, 257)
-    # omega_perp^2 = theta_dot^2 + phi_dot^2 sin^2(theta) = alpha - beta u (energy, THEORY.md T2) = k0 + beta w
-    transverse = float(np.sqrt(max(transverse0**2 + top.beta * w1, 0.0)))
-    return Scales(
-        spin=abs(inertia_axial - inertia_pivot) * abs(spin) / inertia_pivot,
-        omega=float(np.hypot(spin, transverse)),
-        precession=float(np.max(np.abs(top.precession_rate_at_w(w)))),
-        nutation=2 * np.pi / top.nutation_period,
-        transverse=transverse,
-        pendulum=float(np.sqrt(top.beta)),
-    )
-
-
-def momentum_scale(inertia_pivot: float, inertia_axial: float, mgh: float, transverse0: float, spin: float) -> float:
-    """L_scale = sqrt(|L(0)|^2 + 2 I1 M g h) (kg m^2/s): the angular momentum at the start plus what a fall through
-    the potential's amplitude gives; defined (> 0) for a top released at rest without spin."""
-    return float(np.sqrt((inertia_pivot * transverse0) ** 2 + (inertia_axial * spin) ** 2 + 2 * inertia_pivot * mgh))
-
-
-@dataclass(frozen=True)
-class Plan:
-    """The reference run of a parameter set: closed form, scales, step (s), duration (s) and steps."""
-
-    top: tops.HeavyTop
-    scales: Scales
-    step: Derived
-    duration: float
-
-    @property
-    def steps(self) -> float:
-        return self.duration / self.step.value
-
-
-def plan(p: Mapping[str, Any]) -> Plan:
-    """The reference run at the parameters `p` (see the comment on RK4_TARGET).
-
-    Raises
-    ------
-    ValueError
-        Where the closed form is undefined (mgh <= 0, a tilt outside (0, pi)).
-    """
-    return reference_run(
-        closed_form(p),
-        _pivot_inertia(p),
-        p["I3"],
-        _mgh(p),
-        tilt=p["tilt"],
-        tilt_rate=p["nutation_rate"],
-        precession=p["precession"],
-        spin=p["spin"],
-    )
-
-
-def reference_run(
-    top: tops.HeavyTop,
-    inertia_pivot: float,
-    inertia_axial: float,
-    mgh: float,
-    *,
-    tilt: float,
-    tilt_rate: float,
-    precession: float,
-    spin: float,
-) -> Plan:
-    """The reference run of the motion `top` (its initial state as `tops.heavy_top` takes it): RUN_NUTATIONS
-    nutation periods (FALL_NUTATIONS for a falling top whose three would exceed MAX_STEPS) at the step of the
-    comment on RK4_TARGET."""
-    i1 = inertia_pivot
-    transverse0 = float(np.hypot(tilt_rate, precession * np.sin(tilt)))
-    sc = scales(top, i1, inertia_axial, spin, transverse0)
-    r = min(1.0, i1 * sc.transverse / momentum_scale(i1, inertia_axial, mgh, transverse0, spin))
-    omega = sc.fastest
-    # phi is unwrapped only for a steady top (its precession rate is a slope); a nutating one's mean precession counts
-    # whole turns from the prediction, and need not follow the azimuth's whirl near the vertical
-    steady = tilt_rate == 0 and top.w_roots[0] - top.w_roots[1] < 1e-12
-    falling = (
-        tilt <= FALLING_TILT
-        and tilt_rate == 0
-        and precession == 0
-        and abs(spin) < tops.sleeping_threshold(i1, inertia_axial, mgh)
-    )
-    for nutations in (RUN_NUTATIONS, FALL_NUTATIONS) if falling else (RUN_NUTATIONS,):
-        duration = nutations * top.nutation_period
-        by_rk4 = (120 * RK4_TARGET / (max(r, 1e-300) * omega**5 * duration)) ** 0.25
-        by_resolution = SPIN_TURN / omega
-        by_unwrap = UNWRAP_TURN / sc.precession if steady and sc.precession > 0 else np.inf
-        limits = {"RK4 drift": by_rk4, "resolution": by_resolution, "azimuth unwrap": by_unwrap}
-        which = min(limits, key=limits.get)
-        h = round_step(limits[which])
-        if duration / h <= MAX_STEPS:
-            break
-    rule = (
-        f"min((120 x {RK4_TARGET:g} / (r Omega^5 T))^(1/4), {SPIN_TURN:g} / Omega, {UNWRAP_TURN:g} / "
-        f"|phi_dot| if steady) with r = I1 |omega_perp|max / L_scale = {r:.3g}, Omega = max(|omega|max, "
-        f"|I3 - I1| |omega3| / I1, omega_nut, sqrt(beta)) = {omega:.4g} rad/s, T = {nutations:g} T_nut = "
-        f"{duration:.4g} s: min({by_rk4:.4g}, {by_resolution:.4g}, {by_unwrap:.4g}) s ({which}), rounded down to "
-        f"one digit: {h:.1g} s"
-    )
-    return Plan(top, sc, Derived(h, rule), duration)
-
-
-def _plan_or_none(p: Mapping[str, Any]) -> Plan | None:
-    try:
-        return plan(p)
-    except (ValueError, ArithmeticError):
-        return None
-
-
-def _where(p: Mapping[str, Any], *names: str) -> str:
-    units = {"mass": "kg", "arm": "m", "I1": "kg m^2", "I3": "kg m^2", "tilt": "rad", "g": "m/s^2"}
-    return ", ".join(f"{n} = {float(p[n]):.10g} {units.get(n, 'rad/s')}" for n in names)
-
-
-_ALL_NAMES = ("mass", "arm", "I1", "I3", "tilt", "spin", "precession", "nutation_rate", "g")
-
-
-def _run_length(p: Mapping[str, Any]) -> str | None:
-    """Domain test: the run (`run_nutations` nutation periods) takes at most MAX_STEPS reference steps."""
-    pl = _plan_or_none(p)
-    if pl is not None and not pl.steps <= MAX_STEPS:
-        return (
-            f"{_where(p, *_ALL_NAMES)} ({pl.duration / pl.top.nutation_period:g} nutation periods of "
-            f"{pl.top.nutation_period:.3g} s take {pl.steps:.3g} steps of {pl.step.value:.1g} s)"
-        )
-    return None
-
-
-# The body-frame angular acceleration of the top is at most |I1 - I3| |omega3| |omega_perp|max / I1 + M g h / I1
-# (Euler's equations, THEORY.md R7, with the gravity torque); refused above settings.MAX_ACCELERATION (mjMAXVAL / 10).
-
-
-def _acceleration(p: Mapping[str, Any]) -> str | None:
-    """Domain test: the largest angular acceleration of the motion stays below MAX_ACCELERATION."""
-    pl = _plan_or_none(p)
-    if pl is None:
-        return None
-    i1 = _pivot_inertia(p)
-    bound = abs(i1 - p["I3"]) * abs(p["spin"]) * pl.scales.transverse / i1 + _mgh(p) / i1
-    if not bound <= MAX_ACCELERATION:
-        return f"{_where(p, *_ALL_NAMES)} (angular accelerations up to {bound:.3g} rad/s^2)"
-    return None
-
-
-# The mean precession is the advance of phi between the first and last theta maxima over the run, known to ~2e-11
-# rad (round-off and interpolation, measured); it must advance by 1.2e-4 rad for that to stay below half the 1e-6
-# tolerance (a planar swing, spin = 0 and phi_dot0 = 0, does not precess at all).
-MIN_ADVANCE = 1.2e-4
-
-
-def _advancing(p: Mapping[str, Any]) -> str | None:
-    """Domain test: |mean phi_dot| over the run's whole nutation periods >= MIN_ADVANCE rad."""
-    pl = _plan_or_none(p)
-    if pl is None:
-        return None
-    advance = abs(pl.top.mean_precession_rate) * 3 * pl.top.nutation_period
-    if not advance >= MIN_ADVANCE:
-        return f"{_where(p, *_ALL_NAMES)} (the axis advances {advance:.3g} rad in three nutation periods)"
-    return None
-
-
-def _steady_by_derivation(root: int, case: str):
-    def test(p: Mapping[str, Any]) -> str | None:
-        derived = _steady(p, root)
-        if p["precession"] != derived:
-            return (
-                f"precession = {p['precession']:.10g} rad/s set by hand (case '{case}' starts at the "
-                f"{'slow' if root == 0 else 'fast'} T4 root, {derived:.10g} rad/s here; a top started at another "
-                "phi_dot nutates: run heavy-top:nutation, or heavy-top:looping)"
-            )
-        return None
-
-    return test
-
-
-def _linear_max_tilt(p: Mapping[str, Any]) -> str | None:
-    """Domain test (sleeping): above the T6 threshold, with the linear max tilt within LINEAR_ERROR of the exact."""
-    i1, i3, mgh = _pivot_inertia(p), p["I3"], _mgh(p)
-    if (i3 * p["spin"]) ** 2 <= 4 * i1 * mgh:
-        return f"{_where(p, 'spin')} (at or below the sleeping threshold {_threshold(p):.4g} rad/s)"
-    top = _plan_or_none(p)
-    if top is None:
-        return None
-    linear = tops.sleeping_max_tilt(i1, i3, mgh, p["spin"], p["tilt"])
-    error = abs(linear / top.top.theta_max - 1)
-    if not error <= LINEAR_ERROR:
-        return f"{_where(p, 'tilt', 'spin')} (the linear max tilt is {error:.2g} off the exact root of T2)"
-    return None
-
-
-def _falling(p: Mapping[str, Any]) -> str | None:
-    """Domain test (falling): |spin| at most half the T6 threshold."""
-    if abs(p["spin"]) > 0.5 * _threshold(p) * (1 + 1e-12):
-        return f"{_where(p, 'spin')} (the threshold is {_threshold(p):.4g} rad/s)"
-    return None
-
-
-def _spin_bound(p: Mapping[str, Any]) -> float:
-    """S = omega_c / sqrt(2 SIGMA_MIN): |spin| <= S keeps beta / a^2 >= SIGMA_MIN (omega_c: the T6 threshold)."""
-    return _threshold(p) / math.sqrt(2 * SIGMA_MIN)
-
-
-# A top's pivot inertia is at most RHO_MAX times its axial one: the transverse body rates turn at the spin, the
-# nutation at ~I3 omega3 / I1, so a run of RUN_NUTATIONS nutations takes ~RHO_MAX times more steps than nutations
-# need (1e5 to 1e6 at RHO_MAX = 100); a longer arm makes a spinning pendulum, not a top.
-RHO_MAX = 100.0
-# The T6 threshold omega_c = 2 sqrt(I1 M g h) / I3 is the top's natural rate (>= the pendulum's sqrt(M g h / I1) / 2):
-# at most OMEGA_C_MAX (a bound on g), so that the spins up to S = 129 omega_c and the initial rates fit RATE_RANGE.
-OMEGA_C_MAX = 1e4
-RATE_RANGE = Range(-1e6, 1e6)
-# The gyroscopic ratio beta / a^2 = 2 I1 M g h / (I3 omega3)^2 at least: a faster top nutates by ~(beta / a^2)
-# sin^2(theta0) and precesses by ~pi beta / a^2 rad per nutation, below the ~1e-11 of the state's round-off
-# relative to the 1e-6 tolerances (the mean precession needs 1.2e-4 rad over three nutations: 'advancing').
-SIGMA_MIN = 3e-5
-
-DOMAINS = (
-    Domain(
-        "mujoco-max-acceleration",
-        "T1 (MuJoCo: mjMAXVAL = 1e10)",
-        f"angular accelerations |I1 - I3| |omega3| |omega_perp|max / I1 + M g h / I1 <= {MAX_ACCELERATION:g} "
-        "rad/s^2: MuJoCo treats a joint acceleration above mjMAXVAL = 1e10 as a divergence and resets the state "
-        "(an engine limit, not the theory's)",
-        _acceleration,
-    ),
-    Domain(
-        "run-length",
-        "T3 (T_nut = 4 K(k) / sqrt(beta (u3 - u1)))",
-        f"{RUN_NUTATIONS:g} nutation periods (or the first fall of a falling top) in at most {MAX_STEPS:.0e} "
-        "reference steps (the step follows the fastest rate of the motion, its spin at most, the run its "
-        "nutation: a top with a long arm, I1 ~ 100 I3, spins ~100 times faster than it nutates)",
-        _run_length,
-    ),
-    Domain(
-        "advancing",
-        "T3 (mean precession)",
-        f"the axis advances by >= {MIN_ADVANCE:g} rad in three nutation periods: the mean precession is the "
-        "advance of phi between theta maxima, known to ~2e-11 rad (round-off), so smaller advances are not "
-        "measurable to the 1e-6 tolerance (a planar swing, spin = 0 and phi_dot0 = 0, does not precess)",
-        _advancing,
-        cases=("nutation", "looping", "sleeping"),
-    ),
-    Domain(
-        "slow-steady",
-        "T4 (steady precession)",
-        "case slow-precession starts at the slow T4 root: precession is derived, not set by hand (a top started "
-        "at another phi_dot nutates; heavy-top:nutation and heavy-top:looping take any phi_dot)",
-        _steady_by_derivation(0, "slow-precession"),
-        cases=("slow-precession",),
-    ),
-    Domain(
-        "fast-steady",
-        "T4 (steady precession)",
-        "case fast-precession starts at the fast T4 root: precession is derived, not set by hand (a top started "
-        "at another phi_dot nutates; heavy-top:nutation and heavy-top:looping take any phi_dot)",
-        _steady_by_derivation(1, "fast-precession"),
-        cases=("fast-precession",),
-    ),
-    Domain(
-        "linear-max-tilt",
-        "T6 (sleeping top, Wilcox prob. 11.13)",
-        f"I3^2 omega3^2 > 4 I1 M g h (above the threshold) and the linear max tilt within {LINEAR_ERROR:g} of "
-        "the exact root of T2 (a tenth of the check's 1e-3 tolerance): the linearisation's error grows like "
-        "theta0^2 and without bound toward the threshold",
-        _linear_max_tilt,
-        cases=("sleeping",),
-    ),
-    Domain(
-        "falling",
-        "T6 (falling top)",
-        "|spin| <= half the T6 threshold 2 sqrt(I1 M g h) / I3: the fit of ln(theta) over [20, 100] theta0 is "
-        "biased by the decaying mode, more as the spin nears the threshold (2.2e-4 measured at one half)",
-        _falling,
-        cases=("falling",),
-    ),
-)
-
-_ZERO = Range(0.0, 0.0)
-# Tilts of the nutation, looping and steady cases: near the vertical their checks are ill-conditioned (theta_min -> 0
-# is checked relative to itself; a top below the sleeping threshold returns to its start only to dE / (M g h
-# theta0^2); the azimuth of a steady top's axis carries the orientation's round-off over sin(theta0)). The sleeping and
-# falling cases cover the nearly upright top.
-_OFF_VERTICAL = Range(0.01, np.pi - 0.01)
-_OFF_VERTICAL_WHY = (
-    "theta0 within 0.01 rad of the vertical makes the checks relative to theta ill-conditioned (the sleeping and "
-    "falling cases cover the nearly upright top)"
-)
-# Spins of the steady and looping cases: T4 has roots for I3^2 omega3^2 >= 4 I1 M g h cos(theta0), i.e. omega3 >=
-# omega_c sqrt(cos(theta0)) above the horizontal; at least omega_c / 100 keeps the slow root below 100 omega_c near
-# the horizontal (2 M g h / (I3 omega3)). A negative spin mirrors the motion (phi_dot -> -phi_dot).
-_STEADY_SPIN = Bound(
-    "[omega_c max(sqrt(max(cos tilt, 0)), 0.01), S]",
-    lambda p: Range(_threshold(p) * max(math.sqrt(max(math.cos(p["tilt"]), 0.0)), 0.01), _spin_bound(p)),
-    ("mass", "arm", "I1", "I3", "g", "tilt"),
-)
-# The fast root (I3 omega3 + sqrt(D)) / (2 I1 cos(theta0)) <= I3 omega3 / (I1 cos(theta0)): infinite at the
-# horizontal, so fast-precession stays above it (cos(theta0) >= 0.07) with a spin that keeps the root <= 5e5 rad/s.
-FAST_TILT = 1.5
-_FAST_SPIN = Bound(
-    "[omega_c max(sqrt(cos tilt), 0.01), min(S, 5e5 (I1 + M arm^2) cos(tilt) / I3)]",
-    lambda p: Range(
-        _threshold(p) * max(math.sqrt(max(math.cos(p["tilt"]), 0.0)), 0.01),
-        min(_spin_bound(p), 5e5 * _pivot_inertia(p) * math.cos(p["tilt"]) / p["I3"]),
-    ),
-    ("mass", "arm", "I1", "I3", "g", "tilt"),
-)
-_AT_REST = "released at rest (theta_dot = phi_dot = 0), as T6 assumes"
 
 
 class HeavyTop(Scenario):
@@ -773,7 +408,7 @@ class HeavyTop(Scenario):
         tilt = float(np.arctan2(s, R[2, 2]))
         tilt_rate = float((w1 * R[2, 1] - w2 * R[2, 0]) / s)
         phi_dot0 = float((w1 * R[2, 0] + w2 * R[2, 1]) / (s * s))
-        top = tops.heavy_top(i1, i3, mgh, tilt=tilt, tilt_rate=tilt_rate, precession=phi_dot0, spin=float(spin))
+        top = theory.heavy_top(i1, i3, mgh, tilt=tilt, tilt_rate=tilt_rate, precession=phi_dot0, spin=float(spin))
         steady = tilt_rate == 0 and (top.w_roots[0] - top.w_roots[1]) < 1e-12
         transverse0 = float(np.hypot(w1, w2))
         out = {
@@ -800,11 +435,11 @@ class HeavyTop(Scenario):
             "_tolerance": {"theta-min": self.check("theta-min").tolerance * max(1.0, THETA_FLOOR / top.theta_min)},
         }
         if (i3 * spin) ** 2 > 4 * i1 * mgh:
-            out["max-tilt-linear"] = tops.sleeping_max_tilt(i1, i3, mgh, spin, tilt)
+            out["max-tilt-linear"] = theory.sleeping_max_tilt(i1, i3, mgh, spin, tilt)
         else:
-            out["tilt-growth-rate"] = tops.falling_growth_rate(i1, i3, mgh, spin)
+            out["tilt-growth-rate"] = theory.falling_growth_rate(i1, i3, mgh, spin)
         if steady:
-            slow, fast = tops.steady_precession_rates(i1, i3, mgh, spin, tilt)
+            slow, fast = theory.steady_precession_rates(i1, i3, mgh, spin, tilt)
             out["precession-rate"] = slow if abs(phi_dot0 - slow) <= abs(phi_dot0 - fast) else fast
         out["_roundoff_scale"] = _roundoff_scales(out, self.duration(out))
         return out
@@ -885,50 +520,16 @@ class HeavyTop(Scenario):
 
 
 def _roundoff_scales(prediction: Mapping[str, Any], duration: float) -> dict[str, float]:
-    """The float32 round-off scales of the checks whose quantity is small against what float32 rounds
-    (`Scenario.roundoff_scale`; theta-min, theta-max and max-tilt-linear take the generic rule for a small angle:
-    float32 keeps the axis to an absolute ~eps rad per step, its quaternion's numbers being O(1), a random walk of
-    eps sqrt(N) rad over the run; measured on Warp and MJX float32 at spins of 1.7e3-9.2e3 rad/s, theta's extrema
-    were off by 0.5-1.0 eps sqrt(N) rad). Never below 1, the relative floor of any quantity. In units of one radian
-    of that noise:
-
-    * a rate read from an angle's advance over the run (mean-precession, the steady precession-rate) is as precise
-      as the advance, |phi_dot| T rad, and phi is the azimuth of the axis, which the axis' noise moves by noise /
-      sin(theta): scale 1 / (|phi_dot| T sin(theta)), theta where phi is read (the steady top's tilt; for the mean
-      precession the family of extremes farther from its pole, `_mean_precession`) (measured 1.0-1.7
-      eps sqrt(N) / (|phi_dot| T) on a looping and a slow steady top: a top spinning 2e5 times faster than it
-      precesses moved 2.6e-3 rad in the run; a Warp census draw tilted 0.0257 rad, without the sin(theta), was
-      9.0e-2 off against a floor of 4.6e-2, 20 units of eps sqrt(N) / (|phi_dot| T) where 1 / sin(theta) = 39);
-    * the precession at a turning point, phi_dot = (b - a u) / (1 - u^2), is a difference of terms of size
-      |b| + |a u|, each known to float32's relative noise (a = I3 omega3 / I1 and b = p_phi / I1 are the spin's
-      and the vertical momentum's): scale (|b| + |a u|) / |b - a u|, large where the top loops (b ~ a u). An upper
-      bound: the dynamics keeps the two noises correlated, and on four looping tops the errors measured were
-      0.0002-0.13 of it, so a float32 census reports these checks unresolved more often than it must;
-    * the nutation period is a phase's advance, 2 pi n_nut nutations of amplitude theta_max - theta_min: the axis'
-      noise moves the phase by noise / amplitude (measured 0.13-0.22 of that; a fast top nutates by 1e-4 rad, a few
-      times the noise);
-    * the falling top's growth rate is a slope of ln(theta) fitted from theta = 20 theta0 up, where the noise is
-      1 / (20 theta0) of theta, over ln(5) of ln(theta).
-    """
-    scales: dict[str, float] = {}
-    # where phi is read: the extremes farther from their pole (a steady top's theta-min = theta-max = its tilt)
-    sin_theta = max(math.sin(float(prediction["theta-min"])), math.sin(float(prediction["theta-max"])))
-    for name in ("mean-precession", "precession-rate"):
-        rate = abs(float(prediction.get(name, 0.0)))
-        if rate > 0:  # at a pole the azimuth is not defined at all: an infinite scale, unresolved on float32
-            scales[name] = max(1.0, 1.0 / (rate * duration * sin_theta)) if sin_theta > 0 else math.inf
-    top = prediction["_theory"]
-    for name, u in (("precession-at-theta-min", top.roots[1]), ("precession-at-theta-max", top.roots[0])):
-        difference = abs(top.b - top.a * u)
-        if difference > 0:
-            scales[name] = max(1.0, (abs(top.b) + abs(top.a * u)) / difference)
-    amplitude = float(prediction["theta-max"] - prediction["theta-min"])
-    if amplitude > 0:
-        phase = 2 * math.pi * float(prediction["_run_nutations"])
-        scales["nutation-period"] = max(1.0, 1.0 / (amplitude * phase))
-    if "tilt-growth-rate" in prediction:
-        scales["tilt-growth-rate"] = max(1.0, 1.0 / (20 * float(prediction["_tilt0"]) * math.log(5.0)))
-    return scales
+    """The float32 round-off scales of the checks (`Scenario.roundoff_scale`), from the closed form
+    (`rigidbench.analytic.heavy_top.roundoff_scales`)."""
+    return theory.roundoff_scales(
+        prediction["_theory"],
+        duration=duration,
+        nutations=prediction["_run_nutations"],
+        precession_rate=prediction["precession-rate"],
+        tilt=prediction["_tilt0"],
+        falling="tilt-growth-rate" in prediction,
+    )
 
 
 def _axis_at(t: np.ndarray, e3_W: np.ndarray, at: np.ndarray) -> np.ndarray:

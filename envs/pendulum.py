@@ -1,7 +1,7 @@
 """Simple pendulum at any amplitude: the MuJoCo side, and its gymnasium env.
 
 Theory: THEORY.md O1 (exact period ``4 sqrt(l/g) K(sin(a/2))``) and O2 (physical pendulum: l -> I_O/(M h)),
-implemented in `rigidbench.analytic.oscillations`. Model: ``models/pendulum.xml`` (one hinge about world y at
+implemented in `rigidbench.analytic.pendulum`. Model: ``models/pendulum.xml`` (one hinge about world y at
 the origin, a point bob at ``length`` below it).
 """
 
@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 
 from rigidbench import signals
-from rigidbench.analytic import oscillations as osc
+from rigidbench.analytic import pendulum as osc
 from rigidbench.contract import Case, Check, Derived, Scenario, Trajectory
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import PendulumEnv, RodLength

@@ -255,10 +255,7 @@ def _time_scale(p: Mapping[str, Any]) -> tuple[float, str]:
     if _law(p) == "hooke":
         w = math.sqrt(p["stiffness"] / mu)
         return 1.0 / w, f"1 / w = sqrt(mu / k) = {1.0 / w:.4g} s"
-    circular = math.sqrt(p["strength"] / (mu * r0))
-    # r0 is the pericentre for s >= 1 (speed s v_c there); the apocentre for s < 1, with r_p = r0 s^2 / (2 - s^2)
-    r_p = r0 if s >= 1 else r0 * s * s / (2.0 - s * s)
-    v_p = s * circular * r0 / r_p
+    r_p, v_p = orbits.launch_pericentre(mu, p["strength"], r0, s)
     return r_p / v_p, f"r_p / v_p = {r_p:.4g} m / {v_p:.4g} m/s = {r_p / v_p:.4g} s"
 
 
@@ -457,13 +454,12 @@ class TwoBodyOrbit(Scenario):
         law = "kepler" if params["strength"] > 0 else "hooke"
         k = params["strength"] if law == "kepler" else params["stiffness"]
         r0, v0 = orbits.launch(law, orbits.reduced_mass(m1, m2), k, params["separation"], params["speed_ratio"])
-        total = m1 + m2
-        cm_velocity = params["cm_speed"] * v0
+        x1, x2, v1, v2 = orbits.lab_states(m1, m2, r0, v0, params["cm_speed"] * v0)
         q1, q2, d1, d2 = self._addresses(model)
-        data.qpos[q1 : q1 + 7] = [*(m2 / total * r0), 1.0, 0.0, 0.0, 0.0]
-        data.qpos[q2 : q2 + 7] = [*(-m1 / total * r0), 1.0, 0.0, 0.0, 0.0]
-        data.qvel[d1 : d1 + 6] = [*(cm_velocity + m2 / total * v0), 0.0, 0.0, 0.0]
-        data.qvel[d2 : d2 + 6] = [*(cm_velocity - m1 / total * v0), 0.0, 0.0, 0.0]
+        data.qpos[q1 : q1 + 7] = [*x1, 1.0, 0.0, 0.0, 0.0]
+        data.qpos[q2 : q2 + 7] = [*x2, 1.0, 0.0, 0.0, 0.0]
+        data.qvel[d1 : d1 + 6] = [*v1, 0.0, 0.0, 0.0]
+        data.qvel[d2 : d2 + 6] = [*v2, 0.0, 0.0, 0.0]
 
     def _states(self, model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, ...]:
         """x1, x2, v1, v2 (world frame, m and m/s), shape (n, 3) each, from state rows."""

@@ -4,7 +4,7 @@
 `VectorScenarioEnv`: one template env resolves the case, builds the model, sets the initial state and tabulates the
 theory (`ScenarioEnv.load`), and the N copies' physics run as one batch on an engine (`rigidbench.engines.worlds`:
 C MuJoCo's `mujoco.batch`, MJX or MuJoCo Warp). Observations, measurements, deviations and rewards are computed
-for the whole batch in arrays (the env's batched hooks, `ScenarioEnv.observe_batch` and its siblings), not by N
+for the whole batch in arrays (the env's batched hooks, `batched_hooks`), not by N
 Python calls.
 
 On the C engine a batched env equals gymnasium's `SyncVectorEnv` of the same env bit for bit (observations,
@@ -85,6 +85,7 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         self._engine = engines.engine_for(engine, device=device, precision=precision)
         self._nthread = nthread
         self.env = env_cls(**env_kwargs)  # the template: resolves, builds, predicts and scores through its hooks
+        self._hooks = batched_hooks(self.env)
         # Its model and state as the engine stores them (float32 on Warp and MJX float32), from the first reset on.
         self.env._precision = self._engine.precision if self._engine is not None else "float64"
         self.env._engine_name = self._engine.name if self._engine is not None else "mujoco"
@@ -157,11 +158,12 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         env, worlds = self.env, self.worlds
         actions = self._checked(actions)
         restart = np.flatnonzero(self._autoreset)
-        env.apply_actions(actions, worlds)
+        hooks = self._hooks
+        hooks.apply_actions(actions, worlds)
         worlds.step(self._frame_skip)
         self._k += 1
         k = self._k
-        obs = env.observe_batch(worlds)
+        obs = hooks.observe_batch(worlds)
         time = worlds.time.copy()
         table = self._table
         inside = k < len(table)
@@ -171,8 +173,8 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
             predicted = np.array(
                 [table[i] if inside[j] else env.theory(np.array([time[j]]))[0] for j, i in enumerate(k.tolist())]
             )
-        measured = np.asarray(env.measured_batch(obs), dtype=float)
-        deviation = np.asarray(env.deviation_batch(measured, predicted), dtype=float)
+        measured = np.asarray(hooks.measured_batch(obs), dtype=float)
+        deviation = np.asarray(hooks.deviation_batch(measured, predicted), dtype=float)
         reward = np.where(deviation <= DEVIATION_CAP, -deviation, -DEVIATION_CAP)
         # `ScenarioEnv.step`'s divergence test, for every copy: time fell behind (MuJoCo reset a blown-up state) or
         # the observation is not finite.
@@ -358,3 +360,58 @@ def vector_entry_point(env_cls: type[ScenarioEnv]) -> functools.partial:
     """The callable gymnasium's ``vector_entry_point`` holds for `env_cls` (`rigidbench.registry.register_envs`): a
     partial of module-level names, so an env's spec (which holds it) can be pickled."""
     return functools.partial(VectorScenarioEnv, env_cls)
+
+
+class PerCopyHooks:
+    """The batched hooks of an env that defines none (`rigidbench.envs.base.ScenarioEnv`, "batched hooks"): its
+    single-state hooks run once per copy, through a scratch MjData for the state and the inputs."""
+
+    def __init__(self, env) -> None:
+        self.env = env
+
+    def observe_batch(self, worlds) -> np.ndarray:
+        """Observations of every copy, shape (nworld, obs_dim), from ``worlds.qpos``, ``worlds.qvel``,
+        ``worlds.time`` (`rigidbench.engines.Worlds`)."""
+        out = np.empty((worlds.nworld, *self.env.observation_space.shape))
+        with self.env._scratch() as data:
+            for i in range(worlds.nworld):
+                data.qpos[:], data.qvel[:], data.time = worlds.qpos[i], worlds.qvel[i], worlds.time[i]
+                out[i] = self.env.observe()
+        return out
+
+    def apply_actions(self, actions: np.ndarray, worlds) -> None:
+        """Write every copy's (clipped) action, shape (nworld, *action_shape), into ``worlds.ctrl``,
+        ``worlds.qfrc_applied`` or ``worlds.xfrc_applied``."""
+        with self.env._scratch() as data:
+            for i in range(worlds.nworld):
+                data.ctrl[:], data.qfrc_applied[:], data.xfrc_applied[:] = (
+                    worlds.ctrl[i],
+                    worlds.qfrc_applied[i],
+                    worlds.xfrc_applied[i],
+                )
+                self.env.apply_action(actions[i])
+                worlds.ctrl[i], worlds.qfrc_applied[i], worlds.xfrc_applied[i] = (
+                    data.ctrl,
+                    data.qfrc_applied,
+                    data.xfrc_applied,
+                )
+
+    def measured_batch(self, obs: np.ndarray) -> np.ndarray:
+        """`measured` of every row of `obs`, shape (nworld, len(observables))."""
+        return np.array([np.asarray(self.env.measured(row), dtype=float) for row in obs]).reshape(len(obs), -1)
+
+    def deviation_batch(self, measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        """`deviation` of every copy, shape (nworld,), from (nworld, len(observables)) arrays."""
+        return np.array([self.env.deviation(m, p) for m, p in zip(measured.tolist(), predicted.tolist(), strict=True)])
+
+
+BATCHED_HOOKS = ("observe_batch", "apply_actions", "measured_batch", "deviation_batch")
+
+
+def batched_hooks(env) -> PerCopyHooks:
+    """An object with `env`'s four batched hooks: its own where its class defines them, else the per-copy ones."""
+    hooks = PerCopyHooks(env)
+    for name in BATCHED_HOOKS:
+        if hasattr(type(env), name):
+            setattr(hooks, name, getattr(env, name))
+    return hooks

@@ -28,6 +28,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import mujoco
+
 # Fewest timesteps per contact half-period pi/sqrt(k) that MuJoCo survives (the brief's measurement: below
 # ~4 steps the contact explodes). Accuracy needs far more; `RESOLVED_STEPS` is what the reference profiles use.
 # Measured (mujoco 4.0, two 1 kg spheres at 1 m/s, b = a/2, kinetic energy out/in) at 0.5 / 1 / 2 / 4 steps per
@@ -186,3 +188,48 @@ def require_overlap_at_most(speed: float, stiffness: float, contact_distance: fl
             f"more than {fraction:.0%} of r1 + r2 = {contact_distance:g} m ({why}): use stiffness >= "
             f"{(speed / (fraction * contact_distance)) ** 2:.3g} 1/s^2"
         )
+
+
+# ---- parameter targets (`rigidbench.params.Param.target`) for a contact's stiffness and resolution ----------------
+
+
+@dataclass(frozen=True)
+class ContactStiffness:
+    """Stiffness k (1/s^2) of an elastic contact on the named geoms: solref = (-k, 0) (`contact_spring`).
+
+    Read back as the stiffness MuJoCo uses: -solref[0] in the direct format; for a standard-format solref (a
+    profile such as ``mujoco-default`` replaced it) the equivalent spring 1/(tau zeta)^2 of
+    `rigidbench.contact.contact_spring`, which then comes with damping.
+    """
+
+    geoms: tuple[str, ...]
+
+    def apply(self, spec: mujoco.MjSpec, value: float) -> None:
+        for name in self.geoms:
+            spec.geom(name).solref = [-float(value), 0.0]
+
+    def read(self, model: mujoco.MjModel) -> float:
+        return contact_spring(model.geom(self.geoms[0]).solref, model.opt.timestep).stiffness
+
+
+@dataclass(frozen=True)
+class ContactSteps:
+    """Timesteps per contact N (1) of an elastic contact on `geom`: sets the timestep to pi / (N sqrt(k)), so the
+    timestep follows the stiffness k (apply the stiffness first; `Settings.timestep` still overrides it).
+
+    A whole N puts the force's kink at contact exit on a step boundary, as a lead of whole steps does for the
+    entry: RK4 then meets no kink inside a step and stays fourth order (`contact_spring`). Read back from the
+    compiled model as pi / (sqrt(k) timestep), whatever set the timestep.
+    """
+
+    geom: str
+
+    def apply(self, spec: mujoco.MjSpec, value: float) -> None:
+        stiffness = -float(spec.geom(self.geom).solref[0])
+        if stiffness <= 0:
+            raise ValueError(f"geom '{self.geom}': contact steps need a direct-format solref (-k, -b), not a time")
+        spec.option.timestep = math.pi / (float(value) * math.sqrt(stiffness))
+
+    def read(self, model: mujoco.MjModel) -> float:
+        stiffness = contact_spring(model.geom(self.geom).solref, model.opt.timestep).stiffness
+        return math.pi / (math.sqrt(stiffness) * float(model.opt.timestep))

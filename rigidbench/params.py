@@ -9,6 +9,7 @@ uses is what MuJoCo simulated.
 
 from __future__ import annotations
 
+import importlib
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -82,52 +83,6 @@ class BodyComOffset:
 
     def read(self, model: mujoco.MjModel) -> Value:
         return float(model.body(self.body).ipos[self.axis])
-
-
-@dataclass(frozen=True)
-class ContactStiffness:
-    """Stiffness k (1/s^2) of an elastic contact on the named geoms: solref = (-k, 0) (`rigidbench.contact`).
-
-    Read back as the stiffness MuJoCo uses: -solref[0] in the direct format; for a standard-format solref (a
-    profile such as ``mujoco-default`` replaced it) the equivalent spring 1/(tau zeta)^2 of
-    `rigidbench.contact.contact_spring`, which then comes with damping.
-    """
-
-    geoms: tuple[str, ...]
-
-    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
-        for name in self.geoms:
-            spec.geom(name).solref = [-float(value), 0.0]
-
-    def read(self, model: mujoco.MjModel) -> Value:
-        from rigidbench.contact import contact_spring
-
-        return contact_spring(model.geom(self.geoms[0]).solref, model.opt.timestep).stiffness
-
-
-@dataclass(frozen=True)
-class ContactSteps:
-    """Timesteps per contact N (1) of an elastic contact on `geom`: sets the timestep to pi / (N sqrt(k)), so the
-    timestep follows the stiffness k (apply the stiffness first; `Settings.timestep` still overrides it).
-
-    A whole N puts the force's kink at contact exit on a step boundary, as a lead of whole steps does for the
-    entry: RK4 then meets no kink inside a step and stays fourth order (`rigidbench.contact`). Read back from the
-    compiled model as pi / (sqrt(k) timestep), whatever set the timestep.
-    """
-
-    geom: str
-
-    def apply(self, spec: mujoco.MjSpec, value: Value) -> None:
-        stiffness = -float(spec.geom(self.geom).solref[0])
-        if stiffness <= 0:
-            raise ValueError(f"geom '{self.geom}': contact steps need a direct-format solref (-k, -b), not a time")
-        spec.option.timestep = math.pi / (float(value) * math.sqrt(stiffness))
-
-    def read(self, model: mujoco.MjModel) -> Value:
-        from rigidbench.contact import contact_spring
-
-        stiffness = contact_spring(model.geom(self.geom).solref, model.opt.timestep).stiffness
-        return math.pi / (math.sqrt(stiffness) * float(model.opt.timestep))
 
 
 @dataclass(frozen=True)
@@ -433,6 +388,14 @@ def _fmt(value: object) -> str:
     if isinstance(value, (list, tuple, np.ndarray)):
         return ",".join(f"{float(x):g}" for x in np.ravel(value))
     return f"{float(value):g}" if isinstance(value, (int, float)) else repr(value)
+
+
+def __getattr__(name: str):
+    """`ContactStiffness` and `ContactSteps`, whose home is now `rigidbench.contact` (with the contact model they
+    read back through): their old import path here, loaded on first use so that params does not depend on it."""
+    if name in ("ContactStiffness", "ContactSteps"):
+        return getattr(importlib.import_module("rigidbench.contact"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def check_known(params: Sequence[Param], names: Mapping[str, object] | Sequence[str], owner: str) -> None:

@@ -97,6 +97,60 @@ def test_list_shows_parameters_with_units_defaults_and_ranges(capsys):
     assert "nutation-period" in out and "sleeping" in out
 
 
+def test_list_prints_each_checks_theory_link(capsys):
+    assert cli.main(["list", "heavy-top"]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if "tol " in line]
+    assert lines and all("docs/theory.md#" in line for line in lines)
+
+
+def test_list_json_is_the_catalogue_for_programs(capfd):
+    from rigidbench import registry
+    from rigidbench.theory import theory_link, theory_ref
+
+    assert cli.main(["list", "--json"]) == 0  # no PATH: standard output, written to its descriptor
+    doc = json.loads(capfd.readouterr().out)
+    assert doc["kind"] == "catalogue"
+    assert [s["slug"] for s in doc["scenarios"]] == list(registry.scenarios())
+    for sc in doc["scenarios"]:
+        assert sc["title"] and sc["doc"] and "env_id" in sc
+        names = {ch["name"] for ch in sc["checks"]}
+        assert sc["checks"] and sc["cases"] and sc["parameters"]
+        for ch in sc["checks"]:
+            assert ch["tolerance"] > 0 and ch["kind"] in ("rel", "abs") and ch["unit"] is not None
+            assert ch["reason"] and ch["theory_ref"], (sc["slug"], ch["name"])
+            assert ch["theory_ref"] == theory_ref(ch["theory"]) and ch["theory_link"] == theory_link(ch["theory_ref"])
+        for case in sc["cases"]:
+            assert case["name"] and set(case["checks"]) <= names
+            for bound in case["ranges"].values():
+                assert bound["text"]
+            assert not case["ranges"] or case["regime"]
+        for p in sc["parameters"]:
+            assert {"name", "unit", "doc", "default", "range", "valid"} <= set(p) and p["range"]
+        for d in sc["domains"]:
+            assert d["name"] and d["text"] and d["theory"] and d["theory_ref"] == theory_ref(d["theory"])
+
+
+def test_list_json_writes_a_file_and_refuses_a_directory(tmp_path, capsys):
+    path = tmp_path / "catalogue.json"
+    assert cli.main(["list", "--json", str(path), "heavy-top"]) == 0
+    doc = json.loads(path.read_text())
+    assert [s["slug"] for s in doc["scenarios"]] == ["heavy-top"]
+    assert capsys.readouterr().out == ""
+    assert cli.main(["list", "--json", str(tmp_path)]) == 2
+    assert "--json" in capsys.readouterr().err
+
+
+def test_run_brief_prints_only_what_did_not_pass_and_the_summary(capsys):
+    assert cli.main(["run", "--quiet", "--brief", "heavy-top:nutation", "--profile", "mujoco-default"]) == 1
+    out = capsys.readouterr().out.strip().splitlines()
+    rows = [line for line in out if line.startswith("heavy-top:")]
+    assert rows and not any("PASS" in line for line in rows) and all("FAIL" in line for line in rows)
+    assert "passed," in out[-1] and "failed" in out[-1]
+    assert cli.main(["run", "--quiet", "--brief", "heavy-top:nutation"]) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    assert len(out) == 1 and " 0 failed" in out[0]
+
+
 def test_python_dash_m_runs_the_same_cli():
     done = subprocess.run([sys.executable, "-m", "rigidbench", "list"], capture_output=True, text=True, check=False)
     assert done.returncode == 0 and "free-asymmetric-top" in done.stdout

@@ -231,9 +231,21 @@ def test_beam_bins_cover_the_projectiles_whole_range(x):
     """The beam's projectile bins hold every LAB angle the cut beam can give: for m1 > m2 from 0 (the short branch's
     near-head-on collisions), and the top bin's probability is finite where x sin(psi_max) rounds above 1 (x =
     2.01479, 8.01907)."""
-    from rigidbench.envs.rutherford import beam_bins
-
-    edges = beam_bins(0.5, x)["projectile"]
+    edges = coulomb.beam_bins(0.5, x, 20)["projectile"]
     p = coulomb.lab_angle_probabilities(edges, 0.5, x)
     assert np.all(np.isfinite(p)) and np.all(p >= 0)
     assert p.sum() == pytest.approx(1.0, abs=1e-8)
+
+
+@pytest.mark.parametrize("b_over_d", [0.0, 0.3, 5.0])
+def test_pair_invariants_recover_the_orbit_from_a_lab_state_on_it(b_over_d):
+    """A pair placed on its exact orbit (`lab_pair_states`) gives back its b, D, v and the beam's momentum m1 v."""
+    m1, m2 = 2.0, 0.5
+    mu = m1 * m2 / (m1 + m2)
+    kappa = D * V**2  # k / mu
+    x1, v1, x2, v2 = coulomb.lab_pair_states(-3.0 * D / V, np.array([b_over_d * D]), np.array([0.7]), (m1, m2), D, V)
+    inv = coulomb.pair_invariants(x1, v1, x2, v2, (m1, m2), kappa)
+    assert inv["b"][0] == pytest.approx(b_over_d * D, rel=1e-12, abs=1e-12 * D)
+    assert inv["distance"][0] == pytest.approx(D, rel=1e-12) and inv["speed"][0] == pytest.approx(V, rel=1e-12)
+    assert np.allclose(inv["momentum"][0], [m1 * V, 0.0, 0.0], rtol=1e-12, atol=1e-12 * m1 * V)
+    assert inv["energy"][0] == pytest.approx(0.5 * V**2, rel=1e-12) and mu > 0

@@ -206,3 +206,34 @@ def test_momentum_along_the_axis_and_its_swing_bound_match_the_rotation_matrices
             I_T, I_G, compass.spin_momentum, OMEGA, LAT, amplitude, compass.max_rate(amplitude)
         )
         assert swing <= bound <= 1.3 * swing
+
+
+# ---- the compass as built, and the scales of a run ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("lat", [0.0, 0.6, -1.2])
+def test_axes_geometry_of_a_platform_axis_in_the_meridian_plane(lat):
+    """n = (0, cos lat, sin lat) in East-North-Up with the spin axis North at zero gimbal angle: latitude lat,
+    horizontal fraction cos(lat), North at gimbal angle 0; turned East by 0.3 rad, North is at -0.3."""
+    n, up = np.array([0.0, np.cos(lat), np.sin(lat)]), np.array([0.0, 0.0, 1.0])
+    latitude, horizontal, north = gc.axes_geometry(3.0 * n, up, np.array([0.0, 1.0, 0.0]))
+    assert latitude == pytest.approx(lat, abs=1e-15)
+    assert horizontal == pytest.approx(np.cos(lat), abs=1e-15)
+    assert north == pytest.approx(0.0, abs=1e-15)
+    spin0 = np.array([np.sin(0.3), np.cos(0.3), 0.0])  # the spin axis 0.3 rad East of North at zero gimbal angle
+    assert gc.axes_geometry(n, up, spin0)[2] == pytest.approx(-0.3, abs=1e-15)
+
+
+def test_gyroscopic_roundoff_is_eps_times_the_spin_over_the_restoring_rate():
+    eps = np.finfo(float).eps
+    assert gc.gyroscopic_roundoff(50.0, 0.4, np.pi / 2) == pytest.approx(eps * 50.0 / 0.4, rel=1e-15)
+    assert gc.gyroscopic_roundoff(50.0, 0.4, 0.0) == np.inf
+
+
+def test_period_sensitivity_tends_to_a_squared_over_8_for_the_pendulum():
+    """With B = 0 the hunting is the pendulum (T ~ T0 (1 + a^2 / 16)): d ln T / d ln a -> a^2 / 8."""
+    compass = gc.Gyrocompass(1e-9, 1.0, 2.0, 0.5)  # B / A = I_t Omega_perp / H = 2.5e-10
+    a = 0.01
+    assert gc.period_sensitivity(compass, a) == pytest.approx(a * a / 8, rel=1e-3)
+    assert gc.period_sensitivity(compass, 0.0) == 0.0
+    assert gc.fastest_rate(compass, a) == compass.hunting_frequency  # small swings: omega_g is the fastest rate

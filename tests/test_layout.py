@@ -51,3 +51,22 @@ def test_generic_names_are_not_installed_as_top_level_packages(tmp_path):
 def test_models_declare_radians_and_autolimits():
     for xml in (ROOT / "models").glob("*.xml"):
         assert '<compiler angle="radian" autolimits="true"' in xml.read_text(), xml.name
+
+
+def test_importing_every_analytic_module_loads_no_simulator():
+    """The rule above, through every import an analytic module makes (rigidbench's own modules included). The
+    package's own import registers every env, so the subprocess stands in bare packages for `rigidbench` and
+    `rigidbench.analytic` (their folders, without running their __init__) and imports the analytic modules alone."""
+    names = sorted(p.stem for p in (ROOT / "analytic").glob("*.py") if p.stem != "__init__")
+    forbidden = ("mujoco", "gymnasium", "dm_control", "dm_env", "rigidbench.envs", "rigidbench.scenario")
+    code = (
+        "import importlib, sys, types\n"
+        "for name, folder in (('rigidbench', 'rigidbench'), ('rigidbench.analytic', 'analytic')):\n"
+        "    package = types.ModuleType(name)\n"
+        f"    package.__path__ = [{str(ROOT)!r} + '/' + folder]\n"
+        "    sys.modules[name] = package\n"
+        f"for n in {names!r}: importlib.import_module('rigidbench.analytic.' + n)\n"
+        f"print(sorted(m for m in sys.modules if m.startswith({forbidden!r})))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert out.stdout.strip() == "[]"

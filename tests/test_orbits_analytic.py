@@ -199,3 +199,21 @@ def test_a_whole_period_brings_both_orbits_back():
         r, v = orbit.position(np.array([0.0, orbit.period, 3 * orbit.period]))
         np.testing.assert_allclose(r, np.tile(r0, (3, 1)), atol=1e-13)
         np.testing.assert_allclose(v, np.tile(v0, (3, 1)), atol=1e-12)
+
+
+@pytest.mark.parametrize("s", [0.6, 0.9, 1.3])  # e >= 0.19: a circle's e is sqrt of round-off
+def test_launch_pericentre_is_the_kepler_orbits(s):
+    """r_p = a (1 - e) of the launched orbit, and r_p v_p = r0 v0 (angular momentum at the two apsides)."""
+    mu, k, r0 = 0.5, 2.0, 1.5
+    orbit = orbits.kepler_orbit(mu, k, *orbits.launch("kepler", mu, k, r0, s))
+    r_p, v_p = orbits.launch_pericentre(mu, k, r0, s)
+    assert r_p == pytest.approx(orbit.semi_major * (1 - orbit.eccentricity), rel=1e-12)
+    assert r_p * v_p == pytest.approx(r0 * s * np.sqrt(k / (mu * r0)), rel=1e-12)
+
+
+def test_lab_states_put_the_cm_at_the_origin_with_the_cm_velocity():
+    m1, m2 = 2.0, 0.5
+    r, v, cm_velocity = np.array([1.0, 0.2, 0.0]), np.array([0.0, 1.0, 0.3]), np.array([0.1, 0.0, -0.2])
+    x1, x2, v1, v2 = orbits.lab_states(m1, m2, r, v, cm_velocity)
+    assert np.allclose(m1 * x1 + m2 * x2, 0.0, atol=1e-15) and np.allclose(x1 - x2, r, atol=1e-15)
+    assert np.allclose((m1 * v1 + m2 * v2) / (m1 + m2), cm_velocity, atol=1e-15) and np.allclose(v1 - v2, v)

@@ -263,3 +263,11 @@ def test_exact_mode_shapes_hold_however_weak_the_coupling():
     assert osc.Beats(1e-3, G, G).transfer_time == np.inf
     chain = osc.chain_modes(6, 1.0, G, 1e-20, 0.5)
     np.testing.assert_allclose(chain.shapes.T @ chain.inertia @ chain.shapes, np.eye(6), atol=1e-14)
+
+
+def test_the_exact_pendulum_keeps_its_names_in_oscillations():
+    """`analytic/pendulum.py` holds O1; `rigidbench.analytic.oscillations` re-exports it (the old import path)."""
+    from rigidbench.analytic import pendulum
+
+    for name in ("small_amplitude_period", "pendulum_period", "pendulum_period_series", "pendulum_angle"):
+        assert getattr(osc, name) is getattr(pendulum, name)

@@ -293,3 +293,63 @@ def test_slender_body_is_far_from_the_separatrix_in_sensitivity_though_its_gap_i
     i = np.array(inertia)
     assert abs(np.sum(i * (i - i[1]) * w**2)) / np.sum((i * w) ** 2) < 1e-2
     assert tops.separatrix_sensitivity(inertia, omega) < 10
+
+
+# ---- the heavy top's rates, reference step and round-off scales (rigidbench.analytic.heavy_top) ---------------
+
+
+def test_heavy_top_transverse_scale_is_the_largest_transverse_rate_of_the_motion():
+    """Scales.transverse, from the energy (T2), is the largest sqrt(theta_dot^2 + phi_dot^2 sin^2 theta) along the
+    integrated motion (to the ODE's tolerance)."""
+    from rigidbench.analytic import heavy_top
+
+    tilt, precession, tilt_rate, spin = 0.7, 3.0, 2.0, 80.0
+    top = tops.heavy_top(I1, I3, MGH, tilt=tilt, tilt_rate=tilt_rate, precession=precession, spin=spin)
+    transverse0 = float(np.hypot(tilt_rate, precession * np.sin(tilt)))
+    sc = heavy_top.scales(top, I1, I3, spin, transverse0)
+    p_phi = I1 * precession * np.sin(tilt) ** 2 + I3 * spin * np.cos(tilt)
+    T = top.nutation_period
+    sol = solve_ivp(lagrange_top(I1, I3, MGH, spin), (0, T), [tilt, 0.0, tilt_rate], args=(p_phi,), **ODE)
+    theta, _, theta_dot = sol.sol(np.linspace(0, T, 4001))
+    phi_dot = (p_phi - I3 * spin * np.cos(theta)) / (I1 * np.sin(theta) ** 2)
+    measured = np.sqrt(theta_dot**2 + (phi_dot * np.sin(theta)) ** 2).max()
+    assert sc.transverse == pytest.approx(measured, rel=1e-6)
+    assert sc.fastest >= max(sc.omega, sc.nutation, sc.pendulum)
+
+
+def test_heavy_top_momentum_scale_of_a_top_at_rest_is_the_fall_through_the_potential():
+    from rigidbench.analytic import heavy_top
+
+    assert heavy_top.momentum_scale(I1, I3, MGH, 0.0, 0.0) == pytest.approx(np.sqrt(2 * I1 * MGH), rel=1e-15)
+
+
+def test_heavy_top_rk4_step_limit_meets_the_drift_target_exactly():
+    """At the RK4 limit the drift estimate r Omega T (Omega h)^4 / 120 equals RK4_TARGET; the step is the smallest
+    of the three limits; the rule names it."""
+    from rigidbench.analytic import heavy_top
+
+    top = tops.heavy_top(I1, I3, MGH, tilt=0.5, tilt_rate=0.0, precession=0.0, spin=150.0)
+    lim = heavy_top.step_limits(top, I1, I3, MGH, tilt=0.5, tilt_rate=0.0, precession=0.0, spin=150.0, nutations=3.3)
+    h = lim.limits["RK4 drift"]
+    assert lim.r * lim.omega * lim.duration * (lim.omega * h) ** 4 / 120 == pytest.approx(heavy_top.RK4_TARGET)
+    assert lim.duration == pytest.approx(3.3 * top.nutation_period, rel=1e-15)
+    assert lim.limits["azimuth unwrap"] == np.inf  # a nutating top's azimuth is not unwrapped
+    assert lim.step == min(lim.limits.values()) and f"({lim.which})" in lim.rule(1e-4)
+
+
+def test_heavy_top_acceleration_bound_without_spin_is_the_gravity_torque_over_inertia():
+    from rigidbench.analytic import heavy_top
+
+    assert heavy_top.acceleration_bound(I1, I3, MGH, 0.0, 5.0) == MGH / I1
+    assert heavy_top.acceleration_bound(I1, I3, MGH, 10.0, 5.0) == pytest.approx(abs(I1 - I3) * 50 / I1 + MGH / I1)
+
+
+def test_heavy_top_roundoff_scales_are_never_below_one():
+    from rigidbench.analytic import heavy_top
+
+    top = tops.heavy_top(I1, I3, MGH, tilt=0.5, tilt_rate=0.0, precession=-4.7, spin=150.0)
+    scales = heavy_top.roundoff_scales(
+        top, duration=3.3 * top.nutation_period, nutations=3.3, precession_rate=-4.7, tilt=0.5, falling=False
+    )
+    assert set(scales) >= {"mean-precession", "precession-rate", "nutation-period", "precession-at-theta-min"}
+    assert "tilt-growth-rate" not in scales and all(v >= 1.0 for v in scales.values())

@@ -165,13 +165,12 @@ def test_control_tasks_have_no_batched_vector_env():
 
 def test_batched_hooks_equal_the_per_copy_fallbacks():
     """The array hooks of an env (here the planar blows: rotations, headings, wrapped angles) against
-    `ScenarioEnv`'s per-copy fallbacks, which run the single env's own hooks: the same bits."""
-    from rigidbench.envs.base import ScenarioEnv
-    from rigidbench.envs.vector import VectorScenarioEnv
+    the per-copy fallbacks (`PerCopyHooks`), which run the single env's own hooks: the same bits."""
+    from rigidbench.envs.vector import BATCHED_HOOKS, PerCopyHooks, VectorScenarioEnv
 
     fast_cls = env_classes()["rigidbench/PivotedStick-v0"]
-    hooks = ("observe_batch", "apply_actions", "measured_batch", "deviation_batch")
-    plain_cls = type("PlainPivotedStick", (fast_cls,), {h: getattr(ScenarioEnv, h) for h in hooks})
+    fallbacks = {h: lambda self, *a, _h=h: getattr(PerCopyHooks(self), _h)(*a) for h in BATCHED_HOOKS}
+    plain_cls = type("PlainPivotedStick", (fast_cls,), fallbacks)
     fast, plain = VectorScenarioEnv(fast_cls, 3, frame_skip=50), VectorScenarioEnv(plain_cls, 3, frame_skip=50)
     np.testing.assert_array_equal(fast.reset(seed=0)[0], plain.reset(seed=0)[0])
     rng = np.random.default_rng(1)
