@@ -109,6 +109,7 @@ CHECKS = (
         _STATE + "the torque about the axle, zero in theory, in units of omega^2 |I_O| (|I_O| its largest moment "
         "about O): round-off of terms of that size, measured <= 0.8 eps; 1e-13 = 450 eps",
         "R8: N = omega x L is perpendicular to omega: the constant rate needs no drive torque",
+        identity=True,
     ),
     Check(
         "residual-torque",
@@ -118,6 +119,7 @@ CHECKS = (
         _STATE + "|N| of a balanced rotor, zero in theory, in units of omega^2 |I_O|: round-off of terms of that "
         "size, measured <= 0.8 eps; 1e-13 = 450 eps",
         "R8: principal axis along the axle and CoM on it: L parallel to omega, N = 0",
+        identity=True,
     ),
     Check(
         "force-magnitude",
@@ -145,6 +147,7 @@ CHECKS = (
         _STATE + "|F| of a rotor whose CoM is on the axle, zero in theory, in units of omega^2 sqrt(m |I_O|): "
         "round-off of terms of that size, measured <= 1.2 eps; 1e-13 = 450 eps",
         "R8 note: a CoM on the axle does not accelerate: no net bearing force",
+        identity=True,
     ),
     Check(
         "axle-rate",
@@ -156,6 +159,7 @@ CHECKS = (
         "kappa omega T = 7e-11 at kappa <= 1e4 (domain 'axle-inertia'); 1e-9 leaves 14x (max over the run of "
         "|theta'(t) - omega|)",
         "R8: omega constant (the premise; held with no drive, as N . omega = 0)",
+        identity=True,
     ),
 )
 _TORQUE = ("torque-magnitude", "torque-direction", "torque-rate", "axial-torque")

@@ -91,6 +91,7 @@ CHECKS = (
         "abs",
         _POLE,
         "N3 at lambda = +-90 deg: cos(lambda) = 0, no deflection",
+        identity=True,
     ),
     Check(
         "drop-path",

@@ -193,6 +193,7 @@ CHECKS = (
         "abs",
         _DRIFT + " (relative to L_scale, as p-phi-drift)",
         "T1: p_psi = I3 omega3 conserved, eq. 11.62",
+        identity=True,
     ),
 )
 _CONSERVED = ("energy-drift", "p-phi-drift", "p-psi-drift")

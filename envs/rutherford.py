@@ -146,6 +146,7 @@ CHECKS = (
         "abs",
         "equal and opposite pair forces at every RK4 stage: conserved to round-off (~1e-16 per step)",
         "C1: total momentum conserved (|P - P0| / |P0|, worst pair)",
+        identity=True,
     ),
     Check(
         "beam-cm-angle",

@@ -204,6 +204,11 @@ class Check:
         relative to the expected value but to this floor, because the simulation's errors keep that size (they
         scale with the motion that sets it, e.g. the stick's speed). 0 (the default) for a pure relative error.
         A floor that depends on the run is given as ``prediction["_floor"][name]``; the reason states the rule.
+    identity : bool
+        The check measures a relation that holds exactly by symmetry or by construction (a quantity zero by symmetry,
+        a conservation law the engine's equal and opposite forces build in), not the accuracy of an approximation:
+        its error is round-off, and a failure means a broken model or engine, not an inaccurate one. Reported as
+        ``claim: "identity"`` in result rows, `rigidbench list` and the report, apart from the accuracy checks.
     """
 
     name: str
@@ -213,6 +218,12 @@ class Check:
     reason: str
     theory: str
     floor: float = 0.0
+    identity: bool = False
+
+    @property
+    def claim(self) -> str:
+        """``"identity"`` for a check of an exact relation (`identity`), else ``"accuracy"``."""
+        return "identity" if self.identity else "accuracy"
 
     def __post_init__(self) -> None:
         if self.kind not in ("rel", "abs"):
