@@ -2,7 +2,7 @@
 
 Pure numpy/scipy functions of SI values; nothing here imports mujoco (house rule 2).
 
-Conventions (THEORY.md section 0): principal body axes 1, 2, 3; ``omega_body`` are body-frame components of
+Conventions (docs/theory.md section 0): principal body axes 1, 2, 3; ``omega_body`` are body-frame components of
 the angular velocity (rad/s); moments of inertia in kg m^2 about the stated point (the centre of mass for
 free bodies, the pivot for the heavy top); z-x-z Euler angles phi, theta, psi (Goldstein = Wilcox section
 11.7). scipy's elliptic functions take the parameter m = k^2.
@@ -11,7 +11,7 @@ References
 ----------
 [W] Wilcox, *Modern Introductory Mechanics Part II*, ch. 11 (seed 000): sections 11.9 and 11.10.
 [H] Harter, lecture slides Unit 6 and Harter & Kim, Am. J. Phys. 44, 1080 (1976), eqs (8)-(18) (seed 001).
-[T] ../shared/THEORY.md, entries S1-S4 (symmetric), A1-A5 (asymmetric), T1-T7 (heavy top).
+[T] docs/theory.md, entries S1-S4 (symmetric), A1-A5 (asymmetric), T1-T7 (heavy top).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ special = lazy.module("scipy.special")
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Torque-free symmetric top (THEORY.md S1-S4; Wilcox section 11.9, eqs 11.41-11.51)
+# Torque-free symmetric top (docs/theory.md S1-S4; Wilcox section 11.9, eqs 11.41-11.51)
 # ---------------------------------------------------------------------------------------------------------
 
 
@@ -113,7 +113,7 @@ def symmetric_top(inertia_perp: float, inertia_axial: float, omega_body: np.ndar
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Torque-free asymmetric top (THEORY.md A1-A5; Harter & Kim eqs 10-18)
+# Torque-free asymmetric top (docs/theory.md A1-A5; Harter & Kim eqs 10-18)
 # ---------------------------------------------------------------------------------------------------------
 
 
@@ -305,7 +305,7 @@ def intermediate_axis_growth_rate(inertia: tuple[float, float, float], spin: flo
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Heavy symmetric top on a fixed pivot (THEORY.md T1-T7; Wilcox section 11.10)
+# Heavy symmetric top on a fixed pivot (docs/theory.md T1-T7; Wilcox section 11.10)
 # ---------------------------------------------------------------------------------------------------------
 
 
@@ -424,7 +424,7 @@ def heavy_top(
     Parameters
     ----------
     inertia_pivot : float
-        I1 (kg m^2), transverse moment about the pivot (= I_perp,cm + M h^2, THEORY.md R4).
+        I1 (kg m^2), transverse moment about the pivot (= I_perp,cm + M h^2, docs/theory.md R4).
     inertia_axial : float
         I3 (kg m^2).
     mgh : float
