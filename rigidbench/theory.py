@@ -12,7 +12,7 @@ import re
 
 # Where the page lives, relative to the repository root (and to the docs of an installed copy's source).
 THEORY_PAGE = "docs/theory.md"
-# The public copy of the repository's docs that links in a report or a printed catalogue point to.
+# How an ID is written: a capital family letter, digits, and an optional lower-case sub-label (``T4``, ``A2``).
 _ID = re.compile(r"\b([A-Z][0-9]+[a-z]?)\b")
 
 

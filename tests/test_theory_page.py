@@ -69,5 +69,6 @@ def test_no_file_refers_to_a_theory_outside_the_repository():
                 text = f.read_text(encoding="utf-8")
             except UnicodeDecodeError:
                 continue  # a binary file (a figure)
-            offenders += [f"{f.relative_to(ROOT)}:{i}" for i, line in enumerate(text.splitlines(), 1) if "shared/" in line]
+            lines = enumerate(text.splitlines(), 1)
+            offenders += [f"{f.relative_to(ROOT)}:{i}" for i, line in lines if "shared/" in line]
     assert not offenders, f'"shared/" (a path outside the repository) in: {offenders[:20]}'
