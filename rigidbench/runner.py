@@ -222,6 +222,7 @@ def _no_result(job: Job, settings: Settings | None) -> dict[str, Any]:
         "tolerance_kind": None,
         "tolerance_reason": None,
         "theory": None,
+        "theory_ref": None,
         "status": ERROR,
         "passed": None,
         "diverged_at": None,
