@@ -111,7 +111,7 @@ class Domain:
     name : str
         Short name, e.g. ``"small-oscillation"``.
     theory : str
-        THEORY.md entry (and seed) whose domain this is.
+        docs/theory.md entry (and seed) whose domain this is.
     text : str
         The condition and why, e.g. ``"|amplitude| <= 4e-3 rad: the period's amplitude shift a^2/16 stays
         below the 1e-6 tolerance"``.
@@ -196,7 +196,7 @@ class Check:
     reason : str
         Where the tolerance comes from (integrator order and step, contact stiffness, statistics, ...).
     theory : str
-        THEORY.md entry and seed location of the prediction.
+        docs/theory.md entry and seed location of the prediction.
     """
 
     name: str

@@ -1,4 +1,4 @@
-"""MuJoCo against THEORY.md R8: where the axle's reaction lives in MuJoCo, the rate held with no drive, every case
+"""MuJoCo against docs/theory.md R8: where the axle's reaction lives in MuJoCo, the rate held with no drive, every case
 under reference and mujoco-default, the domains, and what MuJoCo's compiler does to a nearly aligned inertial frame."""
 
 import mujoco
