@@ -1,6 +1,6 @@
 """The bent axle: a rigid rotor turning at constant rate about a fixed axle its principal axes are tilted from.
 
-THEORY.md R8 (seed 001, Harter, Fig. 6.5.1; the general form is [DONE] there). For a body turning at constant
+docs/theory.md R8 (seed 001, Harter, Fig. 6.5.1; the general form is [DONE] there). For a body turning at constant
 ``omega = omega z`` about a fixed axle through the point O, its angular momentum about O is ``L = I_O omega`` and
 the torque the axle must exert on it about O is
 
@@ -69,7 +69,7 @@ def inertia_about_point(
 def bearing_torque(inertia_O: np.ndarray, omega: float) -> np.ndarray:
     """Torque N_B (3,; N m) the axle exerts on the rotor about O, in the rotor's axes: ``omega x (I_O omega)``.
 
-    THEORY.md R8 general form: ``N = omega^2 (-I_yz, I_xz, 0)`` for ``omega = omega z``.
+    docs/theory.md R8 general form: ``N = omega^2 (-I_yz, I_xz, 0)`` for ``omega = omega z``.
     """
     w = omega * Z_AXIS
     return np.cross(w, np.asarray(inertia_O, dtype=float) @ w)
@@ -78,7 +78,7 @@ def bearing_torque(inertia_O: np.ndarray, omega: float) -> np.ndarray:
 def bearing_force(mass: float, com: np.ndarray, omega: float) -> np.ndarray:
     """Net force F_B (3,; N) the axle exerts on the rotor, in its axes: ``m omega x (omega x c)`` (centripetal).
 
-    THEORY.md R8 note: of size ``m omega^2 rho``, rho the distance of the centre of mass from the axle.
+    docs/theory.md R8 note: of size ``m omega^2 rho``, rho the distance of the centre of mass from the axle.
     """
     w = omega * Z_AXIS
     return mass * np.cross(w, np.cross(w, np.asarray(com, dtype=float)))
@@ -102,7 +102,7 @@ def rotate_about_axle(vectors_B: np.ndarray, angle: np.ndarray) -> np.ndarray:
 
 
 def point_mass_torque(mass: float, radius: float, omega: float) -> np.ndarray:
-    """THEORY.md R8 (001, Fig. 6.5.1): a point mass at ``r (1/sqrt 2, 1/sqrt 2, 0)`` on an axle along x turning at
+    """docs/theory.md R8 (001, Fig. 6.5.1): a point mass at ``r (1/sqrt 2, 1/sqrt 2, 0)`` on an axle along x turning at
     omega: ``N = -1/2 m r^2 omega^2 z`` (in that figure's axes: axle x, arm in the xy-plane)."""
     return np.array([0.0, 0.0, -0.5 * mass * radius**2 * omega**2])
 

@@ -1,8 +1,8 @@
 """Repulsive Coulomb (Rutherford) scattering of two free bodies: the exact orbit, its asymptotes, cross sections.
 
-Pure numpy/scipy closed forms (house rule 2), from THEORY.md C1-C4, C6, C7 and C9 (Wilcox, *Modern Introductory
+Pure numpy/scipy closed forms (house rule 2), from docs/theory.md C1-C4, C6, C7 and C9 (Wilcox, *Modern Introductory
 Mechanics* Part II, chapter 9, eqs 9.12, 9.13, 9.17, 9.33, 9.46, 9.62-9.66; Harter's LAB orbits, 001, and Am. J.
-Phys. 40, 1852 (1972)). Conventions (THEORY.md section 0): projectile m1, target m2 at rest in the LAB frame long
+Phys. 40, 1852 (1972)). Conventions (docs/theory.md section 0): projectile m1, target m2 at rest in the LAB frame long
 before the collision, ``x = m1 / m2``; ``theta`` the CM scattering angle, ``psi`` the projectile's LAB angle, ``zeta``
 the target's LAB recoil angle, all positive; ``b`` the impact parameter; the relative coordinate is ``r = r1 - r2``
 (projectile minus target), with reduced mass ``mu = m1 m2 / (m1 + m2)`` and speed at infinity ``v`` (the
@@ -26,7 +26,7 @@ those two as its axes, so the outgoing velocity is ``v (cos theta, sin theta)``.
 Finite distance (the Coulomb tail)
 ----------------------------------
 A run starts and ends at a finite separation R, where the orbit has not reached its asymptotes. Two effects, both
-derived from the hodograph (the relative velocity traces a circle of radius ``k / (mu b v)``, THEORY.md K2's
+derived from the hodograph (the relative velocity traces a circle of radius ``k / (mu b v)``, docs/theory.md K2's
 Runge-Lenz vector with the sign of a repulsion): the speed is short of v by ``D / R`` relatively (energy), and the
 velocity's direction is short of the asymptote by ``delta(R) ~ b D / (2 R^2)`` (`asymptote_lag`, exact there). The
 position's polar angle lags by ~ b / R, and in the LAB the projectile's lateral offset never settles (C9,
@@ -46,7 +46,7 @@ from rigidbench.analytic import scattering
 
 
 def distance_scale(strength: float, reduced_mass: float, speed: float) -> float:
-    """``D = k / (mu v^2) = k / (2 E)`` (m): half the head-on distance of closest approach (THEORY.md C7).
+    """``D = k / (mu v^2) = k / (2 E)`` (m): half the head-on distance of closest approach (docs/theory.md C7).
 
     Parameters
     ----------
@@ -61,13 +61,13 @@ def distance_scale(strength: float, reduced_mass: float, speed: float) -> float:
 
 
 def cm_angle(impact_parameter: ArrayLike, distance: float) -> np.ndarray:
-    """CM scattering angle (rad): ``theta = 2 arctan(D / b)``, pi head-on (THEORY.md C7; Wilcox eq 9.17,
+    """CM scattering angle (rad): ``theta = 2 arctan(D / b)``, pi head-on (docs/theory.md C7; Wilcox eq 9.17,
     ``b = (k / (2 E)) cot(theta / 2)``)."""
     return 2.0 * np.arctan2(distance, np.asarray(impact_parameter, dtype=float))
 
 
 def impact_parameter(cm_angle: ArrayLike, distance: float) -> np.ndarray:
-    """``b = D cot(theta / 2)`` (m), the inverse of `cm_angle` (THEORY.md C7, eq 9.17)."""
+    """``b = D cot(theta / 2)`` (m), the inverse of `cm_angle` (docs/theory.md C7, eq 9.17)."""
     return distance / np.tan(0.5 * np.asarray(cm_angle, dtype=float))
 
 
@@ -77,12 +77,12 @@ def closest_approach(impact_parameter: ArrayLike, distance: float) -> np.ndarray
 
 
 def eccentricity(impact_parameter: ArrayLike, distance: float) -> np.ndarray:
-    """``e = sqrt(1 + (b / D)^2)`` (THEORY.md K2's ``sqrt(1 + 2 E l^2 / (mu k^2))`` with l = mu b v)."""
+    """``e = sqrt(1 + (b / D)^2)`` (docs/theory.md K2's ``sqrt(1 + 2 E l^2 / (mu k^2))`` with l = mu b v)."""
     return np.hypot(1.0, np.asarray(impact_parameter, dtype=float) / distance)
 
 
 def cm_cross_section(cm_angle: ArrayLike, distance: float) -> np.ndarray:
-    """Rutherford's ``dsigma/dOmega = (D / 2)^2 / sin^4(theta / 2)`` (m^2/sr), D / 2 = k / (4 E) (THEORY.md C7,
+    """Rutherford's ``dsigma/dOmega = (D / 2)^2 / sin^4(theta / 2)`` (m^2/sr), D / 2 = k / (4 E) (docs/theory.md C7,
     Wilcox eq 9.13)."""
     return (0.5 * distance) ** 2 / np.sin(0.5 * np.asarray(cm_angle, dtype=float)) ** 4
 
@@ -127,7 +127,7 @@ def equal_probability_edges(nbin: int, min_angle: float) -> np.ndarray:
 
 
 def cm_angles_of_projectile(psi: ArrayLike, mass_ratio: float) -> tuple[np.ndarray, np.ndarray]:
-    """The CM angles giving the projectile's LAB angle psi (THEORY.md C2, eq 9.63): the stretch branch ``theta =
+    """The CM angles giving the projectile's LAB angle psi (docs/theory.md C2, eq 9.63): the stretch branch ``theta =
     psi + arcsin(x sin psi)`` and, for x > 1, the short branch ``pi - arcsin(x sin psi) + psi`` (NaN where a branch
     does not exist: beyond psi_max, or x <= 1 for the short one)."""
     psi = np.asarray(psi, dtype=float)
@@ -208,7 +208,7 @@ def relative_orbit(
     """The exact relative position r = r1 - r2 (m) and velocity (m/s) at times t (s) from the closest approach.
 
     In the LAB-aligned frame: the incoming asymptotic velocity is ``v (1, 0, 0)``, the impact offset ``b (0, 1,
-    0)``; the orbit lies in z = 0 (module docstring; THEORY.md C7 with K2's hyperbola). b = 0 is the head-on
+    0)``; the orbit lies in z = 0 (module docstring; docs/theory.md C7 with K2's hyperbola). b = 0 is the head-on
     radial orbit. t and b broadcast (many times of one orbit, or one time of many orbits).
 
     Returns
@@ -267,7 +267,7 @@ def outgoing_direction(position: ArrayLike, velocity: ArrayLike, strength_per_ma
     """Unit vector of the outgoing asymptotic relative velocity, from any state (r, rdot) of the repulsive orbit.
 
     From the invariants: ``h = r x rdot``, the Runge-Lenz vector ``A = rdot x h + kappa r / |r|`` (kappa = k / mu;
-    THEORY.md K2 with the sign of a repulsion; it points from the target to the closest approach), ``e = |A| /
+    docs/theory.md K2 with the sign of a repulsion; it points from the target to the closest approach), ``e = |A| /
     kappa``; the asymptote is at ``f_inf = arccos(1 / e)`` from A towards the motion: ``cos f_inf A^ + sin f_inf
     (h^ x A^)``. Exact wherever the orbit is (an exact Coulomb orbit keeps h and A), so it reads the asymptote the
     simulated orbit will reach without integrating to infinity.
@@ -310,7 +310,7 @@ def _asymptote(position: ArrayLike, velocity: ArrayLike, kappa: float, sign: flo
 
 
 def lab_log_drift(cm_angle: float, masses: tuple[float, float], distance: float) -> float:
-    """Coefficient C (m) of ln t in the projectile's LAB lateral offset from its asymptotic line (THEORY.md C9):
+    """Coefficient C (m) of ln t in the projectile's LAB lateral offset from its asymptotic line (docs/theory.md C9):
     ``d_perp(t) ~ const + C ln t``, ``C = -(m2 / M) D sin(theta - psi)``, the offset measured along the
     in-plane normal to the projectile's asymptotic LAB velocity, that velocity turned by +90 degrees towards the
     side it was deflected to (+Y in the LAB-aligned frame of `relative_orbit`).

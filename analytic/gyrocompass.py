@@ -3,14 +3,14 @@ platform turning at a constant rate (the Earth, scaled).
 
 Pure numpy/scipy functions of SI values; nothing here imports mujoco (house rule 2).
 
-Conventions (THEORY.md section 0, "Earth frames", and G1): local frame x = East, y = North, z = Up; the platform
+Conventions (docs/theory.md section 0, "Earth frames", and G1): local frame x = East, y = North, z = Up; the platform
 turns at ``Omega (0, cos(lat), sin(lat))``; ``alpha`` is the azimuth of the spin axis e from North towards East;
 ``chi`` the rotor's spin angle about e, relative to the gimbal. ``inertia_axial`` (I_a) and
 ``inertia_transverse`` (I_t) are the rotor's principal moments about its centre of mass, which sits at the gimbal
 centre; ``inertia_gimbal`` (I_g) is the gimbal's moment about the vertical. ``Omega_perp = Omega cos(lat)`` is the
 platform rate's component perpendicular to the gimbal axis (G1: "in general Omega cos(lat) -> Omega_perp").
 
-The exact hunting equation (THEORY.md G1, from the Lagrangian; checked here against an independent numerical
+The exact hunting equation (docs/theory.md G1, from the Lagrangian; checked here against an independent numerical
 Lagrangian in ``tests/test_gyrocompass_analytic.py``)::
 
     (I_t + I_g) alpha'' = -H Omega_perp sin(alpha) + I_t Omega_perp^2 sin(alpha) cos(alpha)
@@ -23,7 +23,7 @@ amplitude by quadrature.
 
 References
 ----------
-[T] ../shared/THEORY.md, entry G1 (and its checks E1a-c, E2).
+[T] docs/theory.md, entry G1.
 [H] Harter, lecture slides Unit 6 (seed 001): the gyrocompass "will seek true North ... hunting motion".
 """
 

@@ -21,7 +21,7 @@ from rigidbench import lazy
 special = lazy.module("scipy.special")
 
 # ---------------------------------------------------------------------------------------------------------
-# Heavy symmetric top on a fixed pivot (THEORY.md T1-T7; Wilcox section 11.10)
+# Heavy symmetric top on a fixed pivot (docs/theory.md T1-T7; Wilcox section 11.10)
 # ---------------------------------------------------------------------------------------------------------
 
 
@@ -140,7 +140,7 @@ def heavy_top(
     Parameters
     ----------
     inertia_pivot : float
-        I1 (kg m^2), transverse moment about the pivot (= I_perp,cm + M h^2, THEORY.md R4).
+        I1 (kg m^2), transverse moment about the pivot (= I_perp,cm + M h^2, docs/theory.md R4).
     inertia_axial : float
         I3 (kg m^2).
     mgh : float

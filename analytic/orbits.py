@@ -1,12 +1,12 @@
 """Two bodies under a central force, in the LAB and CM views: the Kepler and Hooke orbits.
 
-Pure numpy closed forms (house rule 2), from THEORY.md section 10 (Wilcox, *Modern Introductory Mechanics* Part II,
-chapter 8; Harter, seed 001, "Ptolemaic vs Copernican views" and the CoulIt pictures). Conventions (THEORY.md K1):
+Pure numpy closed forms (house rule 2), from docs/theory.md section 10 (Wilcox, *Modern Introductory Mechanics* Part II,
+chapter 8; Harter, seed 001, "Ptolemaic vs Copernican views" and the CoulIt pictures). Conventions (docs/theory.md K1):
 
 - masses ``m1``, ``m2``, ``M = m1 + m2``, reduced mass ``mu = m1 m2 / M``;
 - relative coordinate ``r = r1 - r2`` (from body 2 to body 1), CM ``R = (m1 r1 + m2 r2) / M`` moving uniformly;
 - CM-frame positions ``r1' = (m2 / M) r`` and ``r2' = -(m1 / M) r``: mass-scaled copies of the relative orbit
-  (THEORY.md K3);
+  (docs/theory.md K3);
 - ``kepler``: potential ``U = -k / r`` (k > 0, attraction; N m^2); ``hooke``: ``U = 1/2 k r^2`` (k > 0; N/m),
   the zero-length spring between the two centres.
 
@@ -27,14 +27,14 @@ _KEPLER_ITERATIONS = 40
 
 
 def reduced_mass(m1: float, m2: float) -> float:
-    """mu = m1 m2 / (m1 + m2) (kg), THEORY.md K1 (Wilcox eq. 8.39)."""
+    """mu = m1 m2 / (m1 + m2) (kg), docs/theory.md K1 (Wilcox eq. 8.39)."""
     return m1 * m2 / (m1 + m2)
 
 
 def apsidal_angle(exponent: float) -> float:
     """Apsidal angle (rad, pericentre to apocentre) of a near-circular orbit in a force ``F = -k / r^n``.
 
-    ``pi / sqrt(3 - n)`` (THEORY.md K5 [DONE]; the stability condition n < 3 is Wilcox section 8.7, eqs
+    ``pi / sqrt(3 - n)`` (docs/theory.md K5 [DONE]; the stability condition n < 3 is Wilcox section 8.7, eqs
     8.132-8.137). Exact for every eccentricity at n = 2 (Kepler: pi) and n = -1 (Hooke: pi / 2), whose orbits close
     (Bertrand's theorem); for other n it is the limit e -> 0.
 
@@ -44,7 +44,9 @@ def apsidal_angle(exponent: float) -> float:
         If ``n >= 3``: no stable circular orbit, so no apsides.
     """
     if not exponent < 3:
-        raise ValueError(f"force exponent n = {exponent:g}: circular orbits are stable only for n < 3 (THEORY.md K5)")
+        raise ValueError(
+            f"force exponent n = {exponent:g}: circular orbits are stable only for n < 3 (docs/theory.md K5)"
+        )
     return float(np.pi / np.sqrt(3.0 - exponent))
 
 
@@ -103,7 +105,7 @@ class Orbit:
     def mean_kinetic_and_potential(self) -> tuple[float, float]:
         """Time averages over a period (J): ``<T> = -E, <U> = 2E`` (kepler) and ``<T> = <U> = E/2`` (hooke).
 
-        THEORY.md K4 (Wilcox section 8.8, eq. 8.148; the virial theorem 2 <T> = <r . grad U> = p <U> for
+        docs/theory.md K4 (Wilcox section 8.8, eq. 8.148; the virial theorem 2 <T> = <r . grad U> = p <U> for
         U ~ r^p, p = -1 and 2), combined with <T> + <U> = E.
         """
         if self.law == "kepler":
@@ -144,7 +146,7 @@ class Orbit:
 
 
 def kepler_orbit(mu: float, k: float, r0: ArrayLike, v0: ArrayLike) -> Orbit:
-    """The bound Kepler orbit (U = -k/r) of relative state (r0, v0): THEORY.md K2.
+    """The bound Kepler orbit (U = -k/r) of relative state (r0, v0): docs/theory.md K2.
 
     ``e = sqrt(1 + 2 E l^2 / (mu k^2))`` (Wilcox eq. 8.78), ``a = -k / (2E)``, ``b = a sqrt(1 - e^2)``,
     ``T = 2 pi sqrt(mu a^3 / k)``; the pericentre lies along the Runge-Lenz vector ``A = p x L - mu k r_hat``
@@ -161,7 +163,7 @@ def kepler_orbit(mu: float, k: float, r0: ArrayLike, v0: ArrayLike) -> Orbit:
     dist = float(np.linalg.norm(r0))
     energy = 0.5 * mu * float(v0 @ v0) - k / dist
     if not energy < 0:
-        raise ValueError(f"E = {energy:.6g} J >= 0: the Kepler orbit is unbound (THEORY.md K2 needs E < 0)")
+        raise ValueError(f"E = {energy:.6g} J >= 0: the Kepler orbit is unbound (docs/theory.md K2 needs E < 0)")
     momentum = mu * np.cross(r0, v0)
     ell2 = float(momentum @ momentum)
     e = float(np.sqrt(max(0.0, 1.0 + 2.0 * energy * ell2 / (mu * k * k))))
@@ -187,7 +189,7 @@ def kepler_orbit(mu: float, k: float, r0: ArrayLike, v0: ArrayLike) -> Orbit:
 
 
 def hooke_orbit(mu: float, k: float, r0: ArrayLike, v0: ArrayLike) -> Orbit:
-    """The orbit of a zero-length spring (U = k r^2 / 2) from relative state (r0, v0): THEORY.md K3 (Hooke).
+    """The orbit of a zero-length spring (U = k r^2 / 2) from relative state (r0, v0): docs/theory.md K3 (Hooke).
 
     ``r(t) = r0 cos(w t) + (v0 / w) sin(w t)``, ``w = sqrt(k / mu)``: an ellipse centred on r = 0 whose semi-axes
     are the square roots of the eigenvalues of ``r0 r0^T + (v0/w)(v0/w)^T``; period ``2 pi sqrt(mu / k)``.
@@ -223,7 +225,7 @@ def hooke_orbit(mu: float, k: float, r0: ArrayLike, v0: ArrayLike) -> Orbit:
 
 @dataclass(frozen=True)
 class BodyOrbit:
-    """One body's orbit about the CM: a mass-scaled copy of the relative orbit (THEORY.md K3).
+    """One body's orbit about the CM: a mass-scaled copy of the relative orbit (docs/theory.md K3).
 
     Attributes
     ----------
@@ -250,7 +252,7 @@ class BodyOrbit:
 
 
 def body_orbits(m1: float, m2: float, orbit: Orbit) -> tuple[BodyOrbit, BodyOrbit]:
-    """The two CM-frame orbits as mass-scaled copies of `orbit` (THEORY.md K1, K3)."""
+    """The two CM-frame orbits as mass-scaled copies of `orbit` (docs/theory.md K1, K3)."""
     total = m1 + m2
     out = []
     for mi, mj, sign in ((m1, m2, 1.0), (m2, m1, -1.0)):
@@ -272,7 +274,7 @@ def body_orbits(m1: float, m2: float, orbit: Orbit) -> tuple[BodyOrbit, BodyOrbi
 
 def body_energy(mass: float, body: BodyOrbit, law: str, r_cm: np.ndarray, v_cm: np.ndarray) -> np.ndarray:
     """E_i(t) = m_i v_i'^2 / 2 + U_i(r_i') (J) of one body from its CM-frame positions and velocities, shape (n, 3)
-    (THEORY.md K3 [DONE]; conserved, and equal to (mu / m_i) E)."""
+    (docs/theory.md K3 [DONE]; conserved, and equal to (mu / m_i) E)."""
     r = np.sqrt(np.einsum("ij,ij->i", r_cm, r_cm))
     u = -body.k / r if law == "kepler" else 0.5 * body.k * r * r
     return 0.5 * mass * np.einsum("ij,ij->i", v_cm, v_cm) + u

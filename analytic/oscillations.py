@@ -5,16 +5,16 @@ Pure numpy/scipy functions of SI values; nothing here imports mujoco (house rule
 
 Conventions: angles in radians from the downward vertical; every pendulum swings in one vertical plane.
 ``inertia_pivot`` is a pendulum's moment of inertia about its pivot axis (kg m^2): a point bob of mass m on a
-massless rod of length l has ``m l^2``; a bob with its own small moment ``I_cm`` has ``I_cm + m l^2`` (THEORY.md
+massless rod of length l has ``m l^2``; a bob with its own small moment ``I_cm`` has ``I_cm + m l^2`` (docs/theory.md
 O2, R4), and every formula here takes the pivot moment so that a bob's residual inertia is accounted for
 exactly rather than neglected. Springs are attached at distance d below the pivots, horizontal and relaxed at
 equilibrium, so that to first order in the angles a spring of stiffness k exerts the torque ``k d^2 (th_i -
-th_j)`` (THEORY.md O3).
+th_j)`` (docs/theory.md O3).
 
 References
 ----------
 [W] Wilcox, *Modern Introductory Mechanics Part II*, ch. 12 (seed 000): sections 12.1-12.5, eqs 12.10-12.26.
-[T] ../shared/THEORY.md, entries O1-O7.
+[T] docs/theory.md, entries O1-O7.
 """
 
 from __future__ import annotations

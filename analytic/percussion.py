@@ -2,11 +2,11 @@
 
 Pure numpy/scipy functions of SI values; nothing here imports mujoco (house rule 2).
 
-Conventions (THEORY.md sections 6 and 7)
+Conventions (docs/theory.md sections 6 and 7)
 ---------------------------------------
 Stick: lies along +y with its centre of mass (CM) at the origin; s is the body coordinate along it. An impulse
 ``impulse`` (Pi) along +x at s = +h (``offset``) turns it clockwise seen from +z: omega_z = -Pi h / I. Moments of
-inertia are about the CM unless the name says otherwise (``inertia_pivot``). THEORY.md writes the uniform stick
+inertia are about the CM unless the name says otherwise (``inertia_pivot``). docs/theory.md writes the uniform stick
 with the *half*-length l (I = M l^2 / 3); the public parameter here is the full length L = 2 l (I = M L^2 / 12).
 
 Ball: radius R, mass M, moment of inertia I = gamma M R^2 about any axis through its centre (gamma = 2/5 for a
@@ -19,7 +19,7 @@ References
 [H] Harter, lecture slides Unit 6, Ch. 2 (seed 001): stick percussion, centre of percussion, cycloids,
     "practical poolhall application" (H = 7/10 of the diameter).
 [W] Wilcox, *Modern Introductory Mechanics Part II* (seed 000), prob. 11.7 (equivalent length of a pendulum).
-[T] ../shared/THEORY.md, entries P1-P6 (stick) and B1-B2 (billiard ball).
+[T] docs/theory.md, entries P1-P6 (stick) and B1-B2 (billiard ball).
 """
 
 from __future__ import annotations
@@ -29,17 +29,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-SOLID_SPHERE = 2.0 / 5.0  # gamma = I / (M R^2), THEORY.md B1
+SOLID_SPHERE = 2.0 / 5.0  # gamma = I / (M R^2), docs/theory.md B1
 
 # ---------------------------------------------------------------------------------------------------------
-# The free stick struck by an impulse (THEORY.md P1-P3; [H] Fig. 2.4.1 slides)
+# The free stick struck by an impulse (docs/theory.md P1-P3; [H] Fig. 2.4.1 slides)
 # ---------------------------------------------------------------------------------------------------------
 
 
 def uniform_rod_inertia(mass: float, length: float) -> float:
     """Moment of inertia (kg m^2) of a thin uniform rod about a transverse axis through its centre: M L^2 / 12.
 
-    `length` is the full length L (THEORY.md R3 writes it with the half-length l = L/2 as M l^2 / 3).
+    `length` is the full length L (docs/theory.md R3 writes it with the half-length l = L/2 as M l^2 / 3).
     """
     return mass * length**2 / 12.0
 
@@ -47,7 +47,7 @@ def uniform_rod_inertia(mass: float, length: float) -> float:
 def centre_of_percussion(mass: float, inertia: float, offset: float) -> float:
     """Distance p (m) from the CM to the centre of percussion, on the far side from the blow: p = I / (M h).
 
-    THEORY.md P2 ([H]: "p = I/(Mh)"; for the uniform stick p = l^2 / (3 h)). The point s = -p is at rest just
+    docs/theory.md P2 ([H]: "p = I/(Mh)"; for the uniform stick p = l^2 / (3 h)). The point s = -p is at rest just
     after an impulse at s = +h. A blow through the CM (h = 0) gives p = inf: no point of the body is at rest.
     """
     return inertia / (mass * offset) if offset != 0 else math.inf
@@ -55,7 +55,7 @@ def centre_of_percussion(mass: float, inertia: float, offset: float) -> float:
 
 @dataclass(frozen=True)
 class StruckStick:
-    """Planar motion of a free stick just after an impulse Pi along +x at s = +h (THEORY.md P1-P3).
+    """Planar motion of a free stick just after an impulse Pi along +x at s = +h (docs/theory.md P1-P3).
 
     Attributes
     ----------
@@ -92,7 +92,7 @@ class StruckStick:
 
 
 def struck_stick(mass: float, inertia: float, impulse: float, offset: float) -> StruckStick:
-    """The free stick after an impulse `impulse` (N s) along +x at `offset` h (m) from the CM (THEORY.md P1-P3).
+    """The free stick after an impulse `impulse` (N s) along +x at `offset` h (m) from the CM (docs/theory.md P1-P3).
 
     Parameters
     ----------
@@ -115,12 +115,12 @@ def struck_stick(mass: float, inertia: float, impulse: float, offset: float) -> 
 
 
 # ---------------------------------------------------------------------------------------------------------
-# The pivoted stick (THEORY.md P4)
+# The pivoted stick (docs/theory.md P4)
 # ---------------------------------------------------------------------------------------------------------
 
 
 def pivot_reaction_impulse(mass: float, inertia_pivot: float, com_distance: float, strike: float, impulse: float):
-    """Reaction impulse J (N s) of a frictionless pivot on a body struck perpendicularly (THEORY.md P4).
+    """Reaction impulse J (N s) of a frictionless pivot on a body struck perpendicularly (docs/theory.md P4).
 
     J = Pi (M d_cm d / I_O - 1), along the blow (negative: the pivot holds the body back).
 
@@ -137,7 +137,7 @@ def pivot_reaction_impulse(mass: float, inertia_pivot: float, com_distance: floa
 
 
 def sweet_spot(mass: float, inertia_pivot: float, com_distance: float) -> float:
-    """d* = I_O / (M d_cm) (m): the strike distance with no pivot reaction (THEORY.md P4; [W] prob. 11.7).
+    """d* = I_O / (M d_cm) (m): the strike distance with no pivot reaction (docs/theory.md P4; [W] prob. 11.7).
 
     It is the centre of percussion referred to the pivot, d_cm + p, and the equivalent length of the physical
     pendulum; 2L/3 for a uniform rod pivoted at one end.
@@ -146,13 +146,13 @@ def sweet_spot(mass: float, inertia_pivot: float, com_distance: float) -> float:
 
 
 # ---------------------------------------------------------------------------------------------------------
-# A ball striking the free stick (THEORY.md P5)
+# A ball striking the free stick (docs/theory.md P5)
 # ---------------------------------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
 class BallOnStick:
-    """Velocities just after a point ball hits the resting free stick perpendicularly (THEORY.md P5).
+    """Velocities just after a point ball hits the resting free stick perpendicularly (docs/theory.md P5).
 
     Attributes
     ----------
@@ -175,7 +175,7 @@ class BallOnStick:
 def ball_on_stick(
     mass: float, inertia: float, offset: float, ball_mass: float, ball_speed: float, restitution: float = 1.0
 ) -> BallOnStick:
-    """A point ball of mass m at speed u (+x) hits the stick at s = h with restitution e (THEORY.md P5)."""
+    """A point ball of mass m at speed u (+x) hits the stick at s = h with restitution e (docs/theory.md P5)."""
     m_eff = 1.0 / (1.0 / mass + offset**2 / inertia)
     impulse = (1.0 + restitution) * ball_mass * ball_speed * m_eff / (ball_mass + m_eff)
     return BallOnStick(
@@ -187,12 +187,12 @@ def ball_on_stick(
 
 
 # ---------------------------------------------------------------------------------------------------------
-# The cue ball (THEORY.md B1, B2)
+# The cue ball (docs/theory.md B1, B2)
 # ---------------------------------------------------------------------------------------------------------
 
 
 def no_skid_height(radius: float, gamma: float = SOLID_SPHERE) -> float:
-    """Height h = I / (M R) = gamma R above the centre at which a horizontal blow leaves no slip (THEORY.md B1).
+    """Height h = I / (M R) = gamma R above the centre at which a horizontal blow leaves no slip (docs/theory.md B1).
 
     2R/5 for a solid sphere: the line of the blow is at H = R + h = 7/10 of the diameter above the table ([H]).
     """
@@ -200,7 +200,7 @@ def no_skid_height(radius: float, gamma: float = SOLID_SPHERE) -> float:
 
 
 def slip_after_impulse(radius: float, height: float, impulse_per_mass: float, gamma: float = SOLID_SPHERE) -> float:
-    """Change of the contact slip u = v - R omega_y (m/s) from a horizontal impulse Pi at height h (THEORY.md B1).
+    """Change of the contact slip u = v - R omega_y (m/s) from a horizontal impulse Pi at height h (docs/theory.md B1).
 
     du = (Pi / M) (1 - h M R / I) = (Pi / M) (1 - h / (gamma R)); zero at the no-skid height whatever the
     state before (the rolling ball stays rolling off a cushion of that height).
@@ -210,7 +210,7 @@ def slip_after_impulse(radius: float, height: float, impulse_per_mass: float, ga
 
 @dataclass(frozen=True)
 class SkidToRoll:
-    """A ball sliding on a table with Coulomb friction until it rolls (THEORY.md B2, B3 in one dimension).
+    """A ball sliding on a table with Coulomb friction until it rolls (docs/theory.md B2, B3 in one dimension).
 
     Attributes
     ----------
@@ -260,7 +260,7 @@ class SkidToRoll:
 def skid_to_roll(
     radius: float, mu: float, g: float, speed: float, spin: float, gamma: float = SOLID_SPHERE
 ) -> SkidToRoll:
-    """The ball's slide with initial speed v0 (+x) and spin omega_y0 (THEORY.md B2).
+    """The ball's slide with initial speed v0 (+x) and spin omega_y0 (docs/theory.md B2).
 
     Validity: point contact, constant Coulomb coefficient mu (sliding = static), no rolling or spinning
     resistance, table horizontal with gravity g.
@@ -289,7 +289,8 @@ def skid_to_roll(
 def cue_strike(
     radius: float, mu: float, g: float, speed: float, height: float, gamma: float = SOLID_SPHERE
 ) -> SkidToRoll:
-    """A resting ball struck horizontally at `height` h above its centre, leaving with CoM speed v0 (THEORY.md B1-B2).
+    """A resting ball struck horizontally at `height` h above its centre, leaving with CoM speed v0 (docs/theory.md
+    B1-B2).
 
     omega0 = Pi h / I = v0 h / (gamma R^2); u0 = v0 (1 - h / (gamma R)); for gamma = 2/5 the final speed is
     v_f = (5/7) v0 (1 + h / R).
@@ -299,13 +300,13 @@ def cue_strike(
 
 
 # ---------------------------------------------------------------------------------------------------------
-# The moving stick hitting a resting ball (THEORY.md P5 seen from the stick; P6, the marble shot)
+# The moving stick hitting a resting ball (docs/theory.md P5 seen from the stick; P6, the marble shot)
 # ---------------------------------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
 class StickHitsBall:
-    """A moving free stick hits a resting point ball at s, perpendicularly (THEORY.md P5 in the stick's frame).
+    """A moving free stick hits a resting point ball at s, perpendicularly (docs/theory.md P5 in the stick's frame).
 
     Attributes
     ----------
@@ -334,7 +335,7 @@ def stick_hits_ball(
 ) -> StickHitsBall:
     """The stick (V, omega_z) hits a resting ball of mass m lying against the stick point s on its +x side.
 
-    The impulse on the ball is J = (1 + e) m M_eff v_s / (m + M_eff) with M_eff = (1/M + s^2/I)^-1 (THEORY.md
+    The impulse on the ball is J = (1 + e) m M_eff v_s / (m + M_eff) with M_eff = (1/M + s^2/I)^-1 (docs/theory.md
     P5, the relative speed being that of the stick point); the stick gets -J at s: V' = V - J/M,
     omega' = omega + J s / I.
     """

@@ -2,7 +2,7 @@
 
 Pure numpy/scipy functions of SI values; nothing here imports mujoco (house rule 2).
 
-Conventions (THEORY.md section 0, "Earth frames"): the rotating frame is the local East-North-Up frame of a
+Conventions (docs/theory.md section 0, "Earth frames"): the rotating frame is the local East-North-Up frame of a
 point at latitude lambda: x = East, y = North, z = Up, and the frame turns at ``Omega = Omega (0, cos lambda,
 sin lambda)`` about an axis through its origin. Gravity is a uniform field fixed in that frame, ``(0, 0, -g)``.
 Every vector below is in the rotating frame's axes unless its name says otherwise. Latitudes are signed
@@ -16,7 +16,7 @@ References
 ----------
 [W] Wilcox, *Modern Introductory Mechanics Part II*, ch. 10 (seed 000): section 10.2-10.3 eqs 10.32-10.35 (the
     rotating-frame acceleration), 10.5 (eastward deflection), 10.6 (Foucault pendulum).
-[T] ../shared/THEORY.md, entries N1-N3 (and O1 for the spherical pendulum's own period).
+[T] docs/theory.md, entries N1-N3 (and O1 for the spherical pendulum's own period).
 [A] G. B. Airy, "On the vibration of a free pendulum in an oval differing little from a straight line",
     Mem. R. Astron. Soc. 20, 121 (1851): an elliptic swing of semi-axes a, b precesses at (3/8) omega0 a b / l^2
     in the sense of its motion.
@@ -42,7 +42,7 @@ optimize = lazy.module("scipy.optimize")
 def rate_vector(rate: float, latitude: float) -> np.ndarray:
     """The frame's angular velocity Omega (0, cos lambda, sin lambda) (rad/s) in local East-North-Up axes.
 
-    THEORY.md section 0 ("Earth frames"). `rate` is Omega (rad/s), `latitude` lambda (rad, signed).
+    docs/theory.md section 0 ("Earth frames"). `rate` is Omega (rad/s), `latitude` lambda (rad, signed).
     """
     return float(rate) * np.array([0.0, np.cos(latitude), np.sin(latitude)])
 
@@ -50,7 +50,7 @@ def rate_vector(rate: float, latitude: float) -> np.ndarray:
 def rotating_frame_acceleration(r: np.ndarray, v: np.ndarray, field: np.ndarray, rate_vec: np.ndarray) -> np.ndarray:
     """Acceleration relative to a frame turning at the constant rate `rate_vec` about its origin (m/s^2).
 
-    THEORY.md N1 (Wilcox 10.35) with R'' = 0 and Omega' = 0: ``a_rel = g - 2 Omega x v - Omega x (Omega x r)``.
+    docs/theory.md N1 (Wilcox 10.35) with R'' = 0 and Omega' = 0: ``a_rel = g - 2 Omega x v - Omega x (Omega x r)``.
     `r`, `v` (shape (..., 3)) are position (m) and velocity (m/s) relative to the frame; `field` the uniform field
     g (m/s^2) fixed in it.
     """
@@ -66,7 +66,7 @@ def rotating_frame_acceleration(r: np.ndarray, v: np.ndarray, field: np.ndarray,
 def foucault_precession_rate(rate: float, latitude: float) -> float:
     """Rate (rad/s) at which the swing plane turns about the local vertical, counter-clockwise seen from above.
 
-    THEORY.md N2 (Wilcox section 10.6): ``-Omega sin(lambda)``: clockwise in the northern hemisphere, counter-
+    docs/theory.md N2 (Wilcox section 10.6): ``-Omega sin(lambda)``: clockwise in the northern hemisphere, counter-
     clockwise in the southern, zero on the equator. Small amplitude; O((Omega/omega0)^2) neglected
     (`precession_neglected_terms` sizes what is left out).
     """
@@ -78,7 +78,7 @@ def foucault_swing(
 ) -> np.ndarray:
     """Horizontal position q = x + i y (m) of the small-amplitude Foucault pendulum released from rest.
 
-    THEORY.md N2: ``q'' + 2 i Omega_z q' + omega0^2 q = 0``, with ``Omega_z = Omega sin(lambda)`` (here
+    docs/theory.md N2: ``q'' + 2 i Omega_z q' + omega0^2 q = 0``, with ``Omega_z = Omega sin(lambda)`` (here
     `vertical_rate`, rad/s: the frame's rate about the vertical), solved by ``q = A e^{i az} (cos w't + i
     (Omega_z / w') sin w't) e^{-i Omega_z t}``, ``w' = sqrt(omega0^2 + Omega_z^2)``, which starts at ``A e^{i az}``
     with q' = 0. `amplitude` A (m) is the release's horizontal distance from the vertical through the pivot,
@@ -97,7 +97,7 @@ def foucault_swing(
 def plumb_line(field: np.ndarray, rate_vec: np.ndarray, length: float, *, tol: float = 1e-15) -> np.ndarray:
     """Unit vector from the pivot to the bob of a pendulum at rest in the rotating frame (the plumb line).
 
-    THEORY.md N1 at rest (v = 0): the bob hangs along ``g - Omega x (Omega x l u)``, the field plus the bob's
+    docs/theory.md N1 at rest (v = 0): the bob hangs along ``g - Omega x (Omega x l u)``, the field plus the bob's
     own centrifugal acceleration, ``u`` being the unit vector sought; solved by fixed-point iteration, which
     contracts by ~ Omega^2 l / g per step.
 
@@ -194,11 +194,12 @@ def rotating_pendulum(
     *,
     rtol: float = 1e-12,
 ) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
-    """The spherical pendulum in the rotating frame, integrated without approximation (THEORY.md N1).
+    """The spherical pendulum in the rotating frame, integrated without approximation (docs/theory.md N1).
 
     The bob (point mass on a massless rod of length l from the pivot at the origin) obeys ``r'' = a_N1(r, v) +
     lambda r``, the tension multiplier ``lambda = -(|v|^2 + r . a_N1) / l^2`` keeping |r| = l; integrated by
-    scipy's DOP853 at `rtol` (absolute tolerance `rtol` x l), the same rod constraint as THEORY.md's check K1.
+    scipy's DOP853 at `rtol` (absolute tolerance `rtol` x l), the same rod constraint as docs/theory.md N2's
+    independent check.
 
     Returns
     -------
@@ -248,7 +249,7 @@ def fall_time(g: float, height: float) -> float:
 
 
 def eastward_deflection(rate: float, g: float, height: float, latitude: float) -> float:
-    """Eastward displacement (m) of a body dropped from rest through height h (THEORY.md N3, Wilcox section 10.5).
+    """Eastward displacement (m) of a body dropped from rest through height h (docs/theory.md N3, Wilcox section 10.5).
 
     ``d_E = (1/3) Omega g t0^3 cos(lambda) = (1/3) Omega cos(lambda) sqrt(8 h^3 / g)``: first order in Omega
     (the Coriolis force of the free-fall velocity); `eastward_neglected_terms` sizes the rest.
@@ -285,7 +286,7 @@ def _x_minus_sin_over_cube(x: np.ndarray) -> np.ndarray:
 def drop_path(t: np.ndarray, field: np.ndarray, rate_vec: np.ndarray, r0: np.ndarray | None = None) -> np.ndarray:
     """Exact position (m, rotating-frame axes) of a body released at rest in the frame, in a field fixed in it.
 
-    THEORY.md N1 integrated in closed form: in the inertial frame (coinciding with the rotating one at t = 0) the
+    docs/theory.md N1 integrated in closed form: in the inertial frame (coinciding with the rotating one at t = 0) the
     field turns, ``g_I(s) = R(s) g`` with R the rotation by Omega s about Omega's axis, so ``r_I(t) = r0 + (Omega
     x r0) t + integral_0^t (t - s) R(s) g ds``; with ``g = g_par + g_perp`` (along and across the axis n) the
     integral is ``g_par t^2/2 + g_perp (1 - cos Omega t)/Omega^2 + (n x g_perp)(Omega t - sin Omega t)/Omega^2``,

@@ -1,7 +1,7 @@
 """Two-body elastic scattering: hard spheres, and the soft contact spring MuJoCo actually simulates.
 
-Pure numpy/scipy closed forms (house rule 2), from THEORY.md section 9 (Wilcox, *Modern Introductory Mechanics*
-Part II, chapter 9). Conventions (THEORY.md section 0): projectile m1, target m2 at rest in the LAB frame,
+Pure numpy/scipy closed forms (house rule 2), from docs/theory.md section 9 (Wilcox, *Modern Introductory Mechanics*
+Part II, chapter 9). Conventions (docs/theory.md section 0): projectile m1, target m2 at rest in the LAB frame,
 ``x = m1 / m2``; ``theta`` is the CM scattering angle, ``psi`` the LAB angle of the projectile, ``zeta`` the LAB
 recoil angle of the target, all positive; ``b`` the impact parameter; ``a = r1 + r2`` the contact distance.
 
@@ -13,7 +13,7 @@ relative coordinate: ``delta'' = -k delta`` along the line of centres, i.e. the 
     V(r) = 1/2 mu k (a - r)^2  for r < a,   0 otherwise,
 
 with mu the reduced mass and k (1/s^2) the constraint-space stiffness. Its deflection function follows from the
-classical scattering integral (THEORY.md C8, Wilcox eq. 9.16) with ``V / E = kappa (a - r)^2``,
+classical scattering integral (docs/theory.md C8, Wilcox eq. 9.16) with ``V / E = kappa (a - r)^2``,
 ``kappa = k / u^2`` (u the relative speed at infinity); it depends on k, u and a only, not on the masses. As
 ``k -> inf`` it tends to the hard-sphere ``theta = 2 arccos(b / a)`` (C5) with a shift of first order in the
 largest penetration ``u / sqrt(k)``: ``theta_hard - theta_soft = pi (b / a) u / (a sqrt(k)) + O(k^-1)``.
@@ -42,7 +42,7 @@ _GAUSS_T, _GAUSS_W = np.polynomial.legendre.leggauss(_GAUSS_ORDER)
 def hard_sphere_cm_angle(impact_parameter: ArrayLike, contact_distance: float) -> np.ndarray:
     """CM scattering angle of smooth hard spheres (rad).
 
-    ``theta = 2 arccos(b / a)`` for ``b < a``, 0 for a miss (THEORY.md C5; Wilcox section 9.9, "b = a sin(alpha),
+    ``theta = 2 arccos(b / a)`` for ``b < a``, 0 for a miss (docs/theory.md C5; Wilcox section 9.9, "b = a sin(alpha),
     2 alpha + theta = pi").
 
     Parameters
@@ -59,7 +59,7 @@ def hard_sphere_cm_angle(impact_parameter: ArrayLike, contact_distance: float) -
 def lab_angles(cm_angle: ArrayLike, mass_ratio: float) -> tuple[np.ndarray, np.ndarray]:
     """LAB angles (psi, zeta) of projectile and target (rad) for a CM angle theta.
 
-    ``tan(psi) = sin(theta) / (cos(theta) + x)`` (THEORY.md C2, Wilcox eq. 9.33), taken in [0, pi] with atan2,
+    ``tan(psi) = sin(theta) / (cos(theta) + x)`` (docs/theory.md C2, Wilcox eq. 9.33), taken in [0, pi] with atan2,
     and ``zeta = (pi - theta) / 2`` (C2, from eq. 9.27).
 
     Parameters
@@ -77,7 +77,7 @@ def lab_angles(cm_angle: ArrayLike, mass_ratio: float) -> tuple[np.ndarray, np.n
 def lab_energy_fractions(cm_angle: ArrayLike, m1: float, m2: float) -> tuple[np.ndarray, np.ndarray]:
     """LAB kinetic energies of projectile and target after the collision, as fractions of T0 = m1 u1^2 / 2.
 
-    ``T1/T0 = (m1^2 + m2^2 + 2 m1 m2 cos(theta)) / (m1 + m2)^2`` (THEORY.md C4, Wilcox eq. 9.46) and
+    ``T1/T0 = (m1^2 + m2^2 + 2 m1 m2 cos(theta)) / (m1 + m2)^2`` (docs/theory.md C4, Wilcox eq. 9.46) and
     ``T2/T0 = 4 m1 m2 sin^2(theta/2) / (m1 + m2)^2`` (C4, from eqs 9.27 and 9.45); they add up to 1.
     """
     c = np.cos(np.asarray(cm_angle, dtype=float))
@@ -86,7 +86,7 @@ def lab_energy_fractions(cm_angle: ArrayLike, m1: float, m2: float) -> tuple[np.
 
 
 def max_lab_angle(mass_ratio: float) -> float:
-    """Largest LAB angle of the projectile (rad): ``arcsin(m2/m1)`` for x > 1 (THEORY.md C3, Wilcox eq. 9.36),
+    """Largest LAB angle of the projectile (rad): ``arcsin(m2/m1)`` for x > 1 (docs/theory.md C3, Wilcox eq. 9.36),
     pi otherwise (every direction is reachable)."""
     return float(np.arcsin(1.0 / mass_ratio)) if mass_ratio > 1 else float(np.pi)
 
@@ -94,7 +94,7 @@ def max_lab_angle(mass_ratio: float) -> float:
 def critical_impact_parameter(contact_distance: float, mass_ratio: float) -> float:
     """Impact parameter b0 (m) at which a heavy projectile (x > 1) reaches psi_max, ``a sqrt((x - 1) / (2 x))``.
 
-    It separates the two branches (THEORY.md C3): b > b0 gives theta < arccos(-1/x) ("stretch", the fast
+    It separates the two branches (docs/theory.md C3): b > b0 gives theta < arccos(-1/x) ("stretch", the fast
     projectile of eq. 9.53 with +), b < b0 the "short" branch (the slow one, with -).
 
     Raises
@@ -111,7 +111,7 @@ def lab_cross_section_projectile(psi: ArrayLike, contact_distance: float, mass_r
     """Hard-sphere LAB differential cross section of the projectile, dsigma/dOmega (m^2/sr), both branches.
 
     ``sigma_lab(psi) = sum over branches of sigma_CM(theta) (x cos(psi) +- s)^2 / s``, ``s = sqrt(1 - x^2 sin^2
-    psi)``, with ``sigma_CM = a^2 / 4`` (THEORY.md C6; Wilcox eqs 9.62 for x < 1, 9.64 for x > 1; C5). For x < 1
+    psi)``, with ``sigma_CM = a^2 / 4`` (docs/theory.md C6; Wilcox eqs 9.62 for x < 1, 9.64 for x > 1; C5). For x < 1
     only the + branch exists; for x > 1 both, up to psi_max where s -> 0 (an integrable singularity); x = 1
     gives ``a^2 cos(psi)`` for psi < pi/2.
     """
@@ -131,7 +131,7 @@ def lab_cross_section_projectile(psi: ArrayLike, contact_distance: float, mass_r
 
 def lab_cross_section_target(zeta: ArrayLike, contact_distance: float) -> np.ndarray:
     """Hard-sphere LAB cross section of the recoiling target (m^2/sr): ``a^2 cos(zeta)`` for zeta < pi/2
-    (THEORY.md C6, ``4 cos(zeta) sigma_CM(pi - 2 zeta)``)."""
+    (docs/theory.md C6, ``4 cos(zeta) sigma_CM(pi - 2 zeta)``)."""
     zeta = np.asarray(zeta, dtype=float)
     return np.where(zeta < np.pi / 2, contact_distance**2 * np.cos(zeta), 0.0)
 
@@ -141,7 +141,7 @@ def lab_angle_probabilities(
 ) -> np.ndarray:
     """Probability that a hit scatters the particle into each LAB-angle bin, from C6.
 
-    ``P_i = (1 / (pi a^2)) integral over the bin of sigma_lab(psi) 2 pi sin(psi) dpsi`` (THEORY.md C6; total
+    ``P_i = (1 / (pi a^2)) integral over the bin of sigma_lab(psi) 2 pi sin(psi) dpsi`` (docs/theory.md C6; total
     cross section pi a^2, C5), by adaptive quadrature of `lab_cross_section_projectile` (or `..._target`) in
     ``w = sqrt(psi_top - psi)``, which removes the integrable 1/s singularity at psi_max.
 
@@ -211,7 +211,7 @@ def soft_sphere_cm_angle(
 ) -> np.ndarray:
     """CM scattering angle (rad) for the contact spring V = 1/2 mu k (a - r)^2 (r < a).
 
-    THEORY.md C8 (Wilcox eq. 9.16): ``theta = pi - 2 integral_{r_min}^inf b dr / (r^2 sqrt(g(r)))`` with
+    docs/theory.md C8 (Wilcox eq. 9.16): ``theta = pi - 2 integral_{r_min}^inf b dr / (r^2 sqrt(g(r)))`` with
     ``g = 1 - b^2/r^2 - V/E``, ``V/E = kappa (a - r)^2``, ``kappa = k / u^2``. Split at r = a: the outer part
     is ``arcsin(b/a)`` exactly. In the inner part g has a simple zero at r_min; writing
     ``g(r) = (r - r_min) h(r)`` with ``h(r) = b^2 (r + r_min) / (r^2 r_min^2) + kappa (2a - r - r_min) > 0``

@@ -2,7 +2,7 @@
 
 Pure numpy/scipy functions of SI values; nothing here imports mujoco (house rule 2).
 
-Conventions (THEORY.md section 0): principal body axes 1, 2, 3; ``omega_body`` are body-frame components of
+Conventions (docs/theory.md section 0): principal body axes 1, 2, 3; ``omega_body`` are body-frame components of
 the angular velocity (rad/s); moments of inertia in kg m^2 about the stated point (the centre of mass for
 free bodies, the pivot for the heavy top); z-x-z Euler angles phi, theta, psi (Goldstein = Wilcox section
 11.7). scipy's elliptic functions take the parameter m = k^2.
@@ -27,7 +27,7 @@ special = lazy.module("scipy.special")
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Torque-free symmetric top (THEORY.md S1-S4; Wilcox section 11.9, eqs 11.41-11.51)
+# Torque-free symmetric top (docs/theory.md S1-S4; Wilcox section 11.9, eqs 11.41-11.51)
 # ---------------------------------------------------------------------------------------------------------
 
 
@@ -114,7 +114,7 @@ def symmetric_top(inertia_perp: float, inertia_axial: float, omega_body: np.ndar
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Torque-free asymmetric top (THEORY.md A1-A5; Harter & Kim eqs 10-18)
+# Torque-free asymmetric top (docs/theory.md A1-A5; Harter & Kim eqs 10-18)
 # ---------------------------------------------------------------------------------------------------------
 
 

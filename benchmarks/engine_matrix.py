@@ -1,5 +1,5 @@
 """The engine matrix (issue 15): scenario x engine, checks passed, worst error / tolerance, from `rigidbench run`
-JSON files, as the Markdown table in README.md and docs/engines.md.
+JSON files, as the Markdown table in docs/engines.md.
 
 Usage::
 

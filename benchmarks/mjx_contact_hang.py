@@ -28,9 +28,9 @@ import numpy as np
 
 CAPTURE = """
 import os, pickle, sys
-from rigidbench import engines
+from rigidbench.engines import mjx
 from rigidbench.scenario import Scenario
-engines._collides = lambda model: False  # capture the gathered batch of both draws' models
+mjx._collides = lambda model: False  # capture the gathered batch of both draws' models
 # Both draws' contacts are too shallow for float32 (contact floors 0.14 and 0.86: refused since 2026-11-26 (e)); the
 # hang is XLA's, whatever the physics, so the capture runs them anyway.
 Scenario.check_precision = lambda *args, **kwargs: None
@@ -40,7 +40,7 @@ def capture(part):
         pickle.dump(rows, open(sys.argv[1], "wb"))
         os._exit(0)
     raise SystemExit("no gathered batch to capture")
-engines._mjx_batch = capture
+mjx._mjx_batch = capture
 from rigidbench.cli import main
 main(["census", "cross-section:equal-mass", "--n", "2", "--seed", "1", "--engine", "mjx", "--quiet"])
 """
@@ -48,12 +48,13 @@ main(["census", "cross-section:equal-mass", "--n", "2", "--seed", "1", "--engine
 REPLAY = """
 import pickle, sys, time
 from rigidbench import engines
-engines.MJX_CONTACT_WORLDS = int(sys.argv[2])
+from rigidbench.engines import mjx
+mjx.MJX_CONTACT_WORLDS = int(sys.argv[2])
 row = pickle.load(open(sys.argv[1], "rb"))[0]
 request = engines._Request(engines.engine_for("mjx"), row["model"], row["states0"], row["nstep"], row["control"])
 request.prepare()
 t = time.perf_counter()
-engines._mjx_batch([request])
+mjx._mjx_batch([request])
 print(f"finished: {len(row['states0'])} worlds x {row['nstep']} steps in {time.perf_counter() - t:.1f} s", flush=True)
 """
 

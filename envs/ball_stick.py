@@ -1,13 +1,13 @@
 """A ball striking a resting free stick elastically (the stick-and-ball percussion shot): MuJoCo side and env.
 
-Theory: THEORY.md P5 (effective mass M_eff = (1/M + h^2/I)^-1, impulse Pi = (1 + e) m u M_eff / (m + M_eff);
+Theory: docs/theory.md P5 (effective mass M_eff = (1/M + h^2/I)^-1, impulse Pi = (1 + e) m u M_eff / (m + M_eff);
 the ball stops when m = M_eff), then P1 for the stick, implemented in `rigidbench.analytic.percussion`.
 Model: ``models/ball_stick.xml``: a free stick along body y and a free ball approaching along +x at
 ``offset`` from the stick's centre, no gravity (frictionless ice). The blow is a real collision: an elastic
 contact (`rigidbench.contact`: direct solref (-k, 0), restitution 1) lasting pi / sqrt(k) = 0.31 ms. Measured
 after the contact has ended (velocities are constant from then on).
 
-Conventions: THEORY.md section 6; the ball hits the stick's -x face, pushing it along +x; omega_z = -Pi h / I.
+Conventions: docs/theory.md section 6; the ball hits the stick's -x face, pushing it along +x; omega_z = -Pi h / I.
 """
 
 from __future__ import annotations
@@ -329,7 +329,7 @@ class BallStickEnv(BlowEnv):
         A uniform stick (``mass``, ``length``) rests on frictionless ice along world y; a ball (``ball_mass``)
         slides at ``ball_speed`` along +x toward it, on the line ``offset`` from the stick's centre, and hits it
         elastically 1 ms into the episode (a real collision, elastic contact of 0.31 ms). With zero action the
-        stick then moves as THEORY.md P5 + P1 say: V = Pi / M, omega = -Pi h / I.
+        stick then moves as docs/theory.md P5 + P1 say: V = Pi / M, omega = -Pi h / I.
 
     Observation Space
         See `BlowEnv`: the *stick's* CM position (x, y) (m), heading (rad), CM velocity (v_x, v_y) (m/s) and

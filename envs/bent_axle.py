@@ -1,6 +1,6 @@
 """Bent axle: the bearing torque and force on a rotor turning at constant rate, and its gymnasium env.
 
-Theory: THEORY.md R8 (seed 001, Harter, Fig. 6.5.1; general form [DONE]), implemented in
+Theory: docs/theory.md R8 (seed 001, Harter, Fig. 6.5.1; general form [DONE]), implemented in
 `rigidbench.analytic.bent_axle`. Model: ``models/bent_axle.xml`` (a rotor on a hinge about world z through the
 origin O; the site ``bearing`` at O carries a ``torque`` and a ``force`` sensor).
 
@@ -414,7 +414,7 @@ _BALANCED = "a statically balanced rotor has its CoM on the axle (com_radial = 0
 
 class BentAxle(Scenario):
     """A rotor turning at constant rate on a fixed axle its principal axes are tilted from: the bearing torque
-    omega x L, fixed in the rotor, and the rotating force of a CoM off the axle (THEORY.md R8)."""
+    omega x L, fixed in the rotor, and the rotating force of a CoM off the axle (docs/theory.md R8)."""
 
     slug = "bent-axle"
     title = "Bent axle: bearing torque omega x L and the rotating force of an unbalanced rotor"
@@ -571,7 +571,7 @@ class BentAxleEnv(ScenarioEnv):
         axle and its centre of mass possibly off it. With zero action it keeps its rate omega (no torque about
         the axle is needed) and the axle exerts on it the torque ``N = omega x L = omega^2 (-I_yz, I_xz, 0)``
         about O and the force ``m omega x (omega x c)``, both fixed in the rotor and turning with it in space
-        (THEORY.md R8). They are read from MuJoCo's ``torque`` and ``force`` sensors at the site ``bearing``.
+        (docs/theory.md R8). They are read from MuJoCo's ``torque`` and ``force`` sensors at the site ``bearing``.
 
     Observation Space
         Box(-inf, inf, (8,)), float64:

@@ -1,6 +1,6 @@
 """Two identical pendulums coupled by a spring: the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md O3 (normal modes, Wilcox Part II sections 12.1-12.3, eqs 12.10-12.24), O4 (beats and energy
+Theory: docs/theory.md O3 (normal modes, Wilcox Part II sections 12.1-12.3, eqs 12.10-12.24), O4 (beats and energy
 transfer, section 12.4) and O7 (the eigenproblem, eqs 12.15-12.26), implemented in
 `rigidbench.analytic.oscillations`. Model: ``models/coupled_pendulums.xml``.
 
@@ -197,7 +197,7 @@ def _beats_regime(kappa: tuple[float, float]) -> dict[str, Range | Bound]:
 
 class CoupledPendulums(Scenario):
     """Two identical pendulums and a spring at d below the pivots: normal modes, beats, energy transfer
-    (THEORY.md O3, O4, O7)."""
+    (docs/theory.md O3, O4, O7)."""
 
     slug = "coupled-pendulums"
     title = "Two identical pendulums coupled by a spring (normal modes and beats)"
@@ -433,7 +433,7 @@ class CoupledPendulumsEnv(PendulumEnv):
     Description
         Two identical point-bob pendulums hinged about the world y axis at x = -0.25 m and +0.25 m, joined by a
         linear spring (stiffness ``k``) attached at ``d`` below the pivots, relaxed at equilibrium. With zero
-        action the motion is THEORY.md O3/O4: a superposition of the in-phase mode (omega_s^2 = M g l / I_O)
+        action the motion is docs/theory.md O3/O4: a superposition of the in-phase mode (omega_s^2 = M g l / I_O)
         and the anti-phase mode (omega_a^2 = omega_s^2 + 2 k d^2 / I_O); from one pendulum released, beats
         with all the energy in pendulum 2 at T_x = pi / (omega_a - omega_s).
 

@@ -1,6 +1,6 @@
 """A uniform beam of hard-sphere collisions: angular distributions and the total cross section by Monte Carlo.
 
-Theory: THEORY.md C5 (dsigma/dOmega_CM = a^2/4, sigma_tot = pi a^2; Wilcox section 9.9) and C6 (LAB cross
+Theory: docs/theory.md C5 (dsigma/dOmega_CM = a^2/4, sigma_tot = pi a^2; Wilcox section 9.9) and C6 (LAB cross
 sections, eqs 9.62 and 9.64, both branches for m1 > m2), in `rigidbench.analytic.scattering`. Model:
 ``models/cross_section.xml`` (the pair of ``hard_spheres.xml`` with a stiffer, shorter contact).
 
@@ -289,7 +289,7 @@ BEAM_SEED = Param(
 
 class CrossSection(Scenario):
     """A uniform beam of `n` smooth elastic sphere collisions: CM and LAB angular distributions as
-    goodness-of-fit tests, and the total cross section from the hit fraction (THEORY.md C5, C6)."""
+    goodness-of-fit tests, and the total cross section from the hit fraction (docs/theory.md C5, C6)."""
 
     slug = "cross-section"
     title = "Hard-sphere cross sections by Monte Carlo (uniform beam)"

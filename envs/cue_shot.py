@@ -1,4 +1,4 @@
-"""``rigidbench/CueShot-v0``: strike the cue ball to roll at a target speed with the least skid (THEORY.md B1-B2).
+"""``rigidbench/CueShot-v0``: strike the cue ball to roll at a target speed with the least skid (docs/theory.md B1-B2).
 
 Built on the `CueStrike` scenario: its model (ball on cloth, cue pulse on a line at ``height``), its initial state
 (the ball settled on the cloth), its closed forms (`rigidbench.analytic.percussion.cue_strike`) and its
@@ -31,7 +31,7 @@ class CueShotEnv(ShotTask):
     Description
         A solid ball (radius R, mass M) rests on cloth with Coulomb friction ``mu``. The agent chooses where and
         how hard to strike it: the height h of the cue's line above the centre and the speed v0 the blow gives
-        (impulse M v0, a 1 ms pulse). The ball then skids and rolls (THEORY.md B1-B2): slip
+        (impulse M v0, a 1 ms pulse). The ball then skids and rolls (docs/theory.md B1-B2): slip
         u0 = v0 (1 - h/(gamma R)), rolling speed v_f = v0 (1 + h/R) / (1 + gamma) (gamma = 2/5). The task: roll
         at the target speed v* with the least skid.
 
@@ -152,7 +152,7 @@ class CueShotEnv(ShotTask):
     def _measure_shot(self, model, traj, prediction) -> dict[str, float]:
         """Final speed (the scenario's measure: the CoM speed at the end of the run) and the skid time: when the
         contact's slip (`CueStrike.slip`) last exceeds `SLIP_TOLERANCE` v*, counted from the start of the blow
-        (the scenario's convention, THEORY.md B2), 0 if it never does."""
+        (the scenario's convention, docs/theory.md B2), 0 if it never does."""
         motion = free_body_motion(model, traj, "ball")
         slip = np.abs(CueStrike.slip(model, motion))
         t = motion.time

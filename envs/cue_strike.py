@@ -1,6 +1,6 @@
 """A billiard ball struck by a cue at a height above its centre, skidding to rolling: the MuJoCo side, and its env.
 
-Theory: THEORY.md B1 (Harter, Unit 6 Ch. 2 "practical poolhall application": h = I/(MR) = 2R/5, no skid) and B2
+Theory: docs/theory.md B1 (Harter, Unit 6 Ch. 2 "practical poolhall application": h = I/(MR) = 2R/5, no skid) and B2
 (skid to roll under Coulomb friction), implemented in `rigidbench.analytic.percussion`.
 Model: ``models/cue_strike.xml``: a free solid ball on a plane with Coulomb friction ``mu``; the cue is a
 rectangular force pulse (`rigidbench.pulse`) of impulse M ``speed`` along world +x, on the world line at
@@ -10,7 +10,7 @@ Conventions: motion along +x, omega_y the spin about +y, slip u = v_x - R omega_
 u = 0). Time is counted from the start of the pulse: with Coulomb friction sliding from the first instant, the
 motion after a rectangular pulse of any length is exactly that after an impulse at t = 0 (u(t) = u0 - 7/2 mu g t).
 
-What MuJoCo does with the sliding ball (the contact findings, THEORY.md B2 "Measure")
+What MuJoCo does with the sliding ball (the contact findings, docs/theory.md B2 "Measure")
     MuJoCo solves each contact's normal and friction rows as one soft constraint, so it may trade normal
     residual for friction: while the ball slides the friction demand exceeds the cone, the normal force rises
     above M g and the ball is kicked off the table at each touchdown. It hops along, in contact for only ~1-2%
@@ -580,7 +580,7 @@ class CueStrikeEnv(BlowEnv):
     Description
         A solid ball (radius ``radius``, mass ``mass``) rests on a cloth with Coulomb friction ``mu``. ``reset``
         strikes it with the cue: a 1 ms force pulse along +x on the line ``height`` above its centre, of impulse
-        M ``speed``. With zero action it then skids and rolls as THEORY.md B1-B2 say: slip u0 = v0 (1 - 5h/2R),
+        M ``speed``. With zero action it then skids and rolls as docs/theory.md B1-B2 say: slip u0 = v0 (1 - 5h/2R),
         decreasing at (7/2) mu g until it rolls at v_f = (5/7) v0 (1 + h/R).
 
     Observation Space

@@ -1,7 +1,7 @@
 """A rolling billiard ball rebounding from a cushion whose nose is at a given height: the slip the rebound leaves.
 The MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md B1 ([DONE] part: a horizontal impulse J at height h above the centre changes the slip by
+Theory: docs/theory.md B1 ([DONE] part: a horizontal impulse J at height h above the centre changes the slip by
 J (R h / I - 1/M), zero at h = I / (M R) = 2R/5, so a rolling ball rebounds from a cushion of height H = 7/10 of the
 diameter still rolling; Harter, Unit 6 Ch. 2, "the bumper height puts the contact point at the CoP"), then B2
 for the skid back to rolling. Implemented in `rigidbench.analytic.percussion`.
@@ -63,7 +63,7 @@ def _rebound_slip(p: Mapping[str, Any]) -> float:
 
 class CushionRebound(CueStrike):
     """A rolling ball rebounds from a cushion of nose height ``cushion_height``: the slip the rebound leaves
-    (zero at 7/10 of the diameter, THEORY.md B1) and the skid back to rolling (B2)."""
+    (zero at 7/10 of the diameter, docs/theory.md B1) and the skid back to rolling (B2)."""
 
     slug = "cushion-rebound"
     title = "Rolling ball rebounding from a cushion: no skid at 7/10 of the diameter"
@@ -181,7 +181,7 @@ class CushionReboundEnv(CueStrikeEnv):
     Description
         A solid ball rolls at ``speed`` on a cloth with Coulomb friction ``mu`` into a cushion whose nose is at
         ``cushion_height`` H above the table. ``reset`` delivers the cushion's impulse (1 + e) M v as a 1 ms pulse
-        on the line at H. With zero action the ball comes back rolling if H = 7/10 of the diameter (THEORY.md
+        on the line at H. With zero action the ball comes back rolling if H = 7/10 of the diameter (docs/theory.md
         B1), otherwise with slip u' = (1 + e) v (5 (H - R) / (2R) - 1), and skids back to rolling (B2).
 
     Observation Space

@@ -1,6 +1,6 @@
 """Double pendulum, small oscillations: the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md O6 (the quartic ``m1 l1 l2 w^4 - (m1 + m2) g (l1 + l2) w^2 + (m1 + m2) g^2 = 0``; equal masses
+Theory: docs/theory.md O6 (the quartic ``m1 l1 l2 w^4 - (m1 + m2) g (l1 + l2) w^2 + (m1 + m2) g^2 = 0``; equal masses
 and lengths ``w^2 = (g/l)(2 -+ sqrt 2)``, shapes ``th2/th1 = +-sqrt 2``; Wilcox Part II prob. 12.4) and O7 (the
 eigenproblem, eqs 12.15-12.26), implemented in `rigidbench.analytic.oscillations`. Model:
 ``models/double_pendulum.xml``.
@@ -144,7 +144,7 @@ def _omega_fast(p: Mapping[str, Any]) -> float:
 
 
 class DoublePendulum(Scenario):
-    """A double pendulum oscillating about its lower equilibrium: its two normal modes (THEORY.md O6, O7)."""
+    """A double pendulum oscillating about its lower equilibrium: its two normal modes (docs/theory.md O6, O7)."""
 
     slug = "double-pendulum"
     title = "Double pendulum: small-oscillation normal modes"
@@ -330,7 +330,7 @@ class DoublePendulumEnv(PendulumEnv):
     Description
         Point bob 1 on a massless rod hinged at the origin, point bob 2 on a massless rod hinged at bob 1, both
         swinging about the world y axis. With zero action and small angles the motion is the superposition of
-        the two normal modes of THEORY.md O6/O7 (equal masses and lengths: ``w^2 = (g/l)(2 -+ sqrt 2)``,
+        the two normal modes of docs/theory.md O6/O7 (equal masses and lengths: ``w^2 = (g/l)(2 -+ sqrt 2)``,
         ``th2/th1 = +-sqrt 2``).
 
     Observation Space

@@ -1,6 +1,6 @@
 """Eastward deflection of a body dropped on a turning platform: the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md N3 (a body dropped from rest through h lands ``(1/3) Omega g t0^3 cos(lambda)`` East of the
+Theory: docs/theory.md N3 (a body dropped from rest through h lands ``(1/3) Omega g t0^3 cos(lambda)`` East of the
 point below its release, t0 = sqrt(2h/g)), and N1 integrated exactly for a field fixed in the turning frame
 (`rigidbench.analytic.rotating.drop_path`: every order in Omega), implemented in `rigidbench.analytic.rotating`.
 Model: ``models/eastward_deflection.xml`` (a free ball released on the axis of a platform turning at a constant
@@ -111,7 +111,7 @@ def _rate_range(p: Mapping[str, Any]) -> Range:
 
 
 class EastwardDeflection(Scenario):
-    """A ball dropped from rest on a platform turning at latitude lambda (THEORY.md N1, N3)."""
+    """A ball dropped from rest on a platform turning at latitude lambda (docs/theory.md N1, N3)."""
 
     slug = "eastward-deflection"
     title = "Eastward deflection of a body dropped on a turning platform ((1/3) Omega g t^3 cos(latitude))"
@@ -247,7 +247,7 @@ class EastwardDeflectionEnv(ScenarioEnv):
         A ball is released at rest relative to a platform (the Earth) that turns at ``rate`` about the axis (0, cos
         lambda, sin lambda) of its East-North-Up frame, from a point on that axis, ``height`` above the ground;
         gravity is fixed in the platform's axes. It lands East of the point below, by (1/3) Omega g t0^3
-        cos(lambda) (THEORY.md N3). With zero action the env follows the exact motion (N1 in closed form,
+        cos(lambda) (docs/theory.md N3). With zero action the env follows the exact motion (N1 in closed form,
         `analytic.rotating.drop_path`).
 
     Observation Space

@@ -1,6 +1,6 @@
 """Foucault pendulum on a turning platform: the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md N2 (the swing plane turns at ``-Omega sin(lambda)`` about the local vertical: clockwise seen
+Theory: docs/theory.md N2 (the swing plane turns at ``-Omega sin(lambda)`` about the local vertical: clockwise seen
 from above in the northern hemisphere, counter-clockwise in the southern, not at all on the equator), with N1
 (the rotating-frame acceleration) for what N2 neglects, implemented in `rigidbench.analytic.rotating`. Model:
 ``models/foucault.xml`` (a spherical pendulum hung from the axis of a platform turning at a constant rate, gravity
@@ -120,7 +120,7 @@ _REGIME = (
 
 
 class Foucault(Scenario):
-    """A spherical pendulum on a platform turning at latitude lambda (THEORY.md N1, N2)."""
+    """A spherical pendulum on a platform turning at latitude lambda (docs/theory.md N1, N2)."""
 
     slug = "foucault"
     title = "Foucault pendulum on a turning platform (swing plane turns at -Omega sin(latitude))"
@@ -331,7 +331,7 @@ class FoucaultEnv(ScenarioEnv):
         A point bob on a massless rod hangs from a ball joint on the axis of a platform (the Earth) that turns at
         ``rate`` about the axis (0, cos lambda, sin lambda) of its East-North-Up frame; gravity is fixed in the
         platform's axes. Released at rest relative to the platform, the swing plane turns at ``-rate sin(lambda)``
-        (THEORY.md N2). With zero action the env follows the exact rotating-frame pendulum (N1,
+        (docs/theory.md N2). With zero action the env follows the exact rotating-frame pendulum (N1,
         `analytic.rotating.rotating_pendulum`).
 
     Observation Space

@@ -1,6 +1,6 @@
 """Torque-free asymmetric top (I1 < I2 < I3): the MuJoCo side of the scenario, and its gymnasium environment.
 
-Theory: THEORY.md A1-A5 (Jacobi elliptic solution of Euler's equations; Harter & Kim, Am. J. Phys. 44, 1080
+Theory: docs/theory.md A1-A5 (Jacobi elliptic solution of Euler's equations; Harter & Kim, Am. J. Phys. 44, 1080
 (1976), eqs 10-18, reproduced in seed 001), implemented in `rigidbench.analytic.tops.asymmetric_top`.
 Model: ``models/free_asymmetric_top.xml``.
 """
@@ -30,7 +30,7 @@ from rigidbench.envs.rotor import (
 from rigidbench.params import BodyInertia, Bound, Param, Range
 
 # Reference timestep (`FreeAsymmetricTop.reference_settings`): the smaller of two limits, as for the symmetric top.
-# - Body frame: omega_B follows sn, cn, dn of s t (THEORY.md A2), whose slopes in tau = s t are at most 1: s h <=
+# - Body frame: omega_B follows sn, cn, dn of s t (docs/theory.md A2), whose slopes in tau = s t are at most 1: s h <=
 #   BODY_TURN = 1.84e-4 rad: RK4's error (s T)(s h)^4 / 120 <~ 1e-15 over a run; rounded down to one digit
 #   (`round_step`) it gives the model file's 1e-4 s at all three default cases (s = 1.84, 1.64, 1.34 rad/s).
 # - World frame: the body turns at |omega|; |omega| h <= WORLD_TURN (envs/free_symmetric_top.py: the orientation's
@@ -57,7 +57,7 @@ CHECKS = (
         1e-8,
         "abs",
         _RK4 + " (max |omega(t) - omega_theory(t)| / |omega| over the run)",
-        "A2: Jacobi elliptic solution (cn, sn, dn), THEORY.md; Harter & Kim eqs 10-16",
+        "A2: Jacobi elliptic solution (cn, sn, dn), docs/theory.md; Harter & Kim eqs 10-16",
     ),
     Check(
         "period",
@@ -73,7 +73,7 @@ CHECKS = (
         1e-8,
         "rel",
         _FLIP,
-        "A3: reversal time 2 K(k) / s, Harter & Kim eq. 17b (as read in THEORY.md A3)",
+        "A3: reversal time 2 K(k) / s, Harter & Kim eq. 17b (as read in docs/theory.md A3)",
     ),
     Check(
         "energy-drift",
@@ -115,7 +115,7 @@ def reference_step(top: tops.AsymmetricTop, omega: Any) -> Derived:
         h,
         f"min({BODY_TURN:g} rad / s, {WORLD_TURN:g} rad / |omega|) = min({BODY_TURN:g} / {top.rate:.4g}, "
         f"{WORLD_TURN:g} / {speed:.4g}), rounded down to one digit: {h:.1g} s ({which} limit; s = the elliptic "
-        "rate of THEORY.md A2)",
+        "rate of docs/theory.md A2)",
     )
 
 
@@ -257,7 +257,7 @@ class FreeAsymmetricTop(Scenario):
     axes, and the intermediate-axis flip (tennis-racket effect), against the exact elliptic solution.
 
     The cases name their default start; an omega set by hand may put the polhode about either axis, and every
-    check holds in both regimes (THEORY.md A2: omega2 = A2 sn(s t + tau0, k) in both)."""
+    check holds in both regimes (docs/theory.md A2: omega2 = A2 sn(s t + tau0, k) in both)."""
 
     slug = "free-asymmetric-top"
     title = "Torque-free asymmetric top (stable axes and the intermediate-axis flip)"
@@ -385,7 +385,7 @@ class FreeAsymmetricTopEnv(FreeRotorEnv):
 
     Description
         A free rigid body with I1 < I2 < I3 (about its CM) and no gravity. With zero action it is Euler's
-        torque-free top, solved exactly by Jacobi elliptic functions (THEORY.md A2); the ``intermediate-axis``
+        torque-free top, solved exactly by Jacobi elliptic functions (docs/theory.md A2); the ``intermediate-axis``
         case shows the flip (A3).
 
     Observation Space

@@ -1,6 +1,6 @@
 """Torque-free symmetric top: the MuJoCo side of the scenario, and its gymnasium environment.
 
-Theory: THEORY.md S1-S4 (Wilcox Part II section 11.9, eqs 11.41-11.51), implemented in
+Theory: docs/theory.md S1-S4 (Wilcox Part II section 11.9, eqs 11.41-11.51), implemented in
 `rigidbench.analytic.tops.symmetric_top`. Model: ``models/free_symmetric_top.xml``.
 """
 
@@ -128,7 +128,7 @@ _ALL = tuple(c.name for c in CHECKS)
 
 def rates(i1: float, i3: float, omega: Any) -> tuple[float, float, float]:
     """(Omega_b, |L| / I1, max(|omega|, |L| / I1)) in rad/s: the body-frame precession, the precession of e3 about L
-    (THEORY.md S1, S3) and the fastest turning rate of the motion."""
+    (docs/theory.md S1, S3) and the fastest turning rate of the motion."""
     w1, w2, w3 = (float(x) for x in omega)
     body = (i3 - i1) * w3 / i1
     precession = float(np.sqrt(w1 * w1 + w2 * w2 + (i3 * w3 / i1) ** 2))
@@ -291,7 +291,7 @@ DOMAINS = (
 
 class FreeSymmetricTop(Scenario):
     """A free rigid body with I1 = I2 spinning with no torque: omega precesses about the symmetry axis in the
-    body frame at Omega_b, and the symmetry axis precesses about L in space at |L|/I1 (THEORY.md S1-S4)."""
+    body frame at Omega_b, and the symmetry axis precesses about L in space at |L|/I1 (docs/theory.md S1-S4)."""
 
     slug = "free-symmetric-top"
     title = "Torque-free symmetric top (prolate and oblate)"
@@ -379,7 +379,7 @@ class FreeSymmetricTop(Scenario):
         w = m.omega_B
         L0 = m.L_W[0]
         L_hat = L0 / np.linalg.norm(L0)
-        # psi with space z along L: rotate the world so L is z, then psi = atan2(R31, R32) (THEORY.md section 0)
+        # psi with space z along L: rotate the world so L is z, then psi = atan2(R31, R32) (docs/theory.md section 0)
         u = np.cross(L_hat, np.eye(3)[np.argmin(np.abs(L_hat))])
         u /= np.linalg.norm(u)
         basis = np.stack([u, np.cross(L_hat, u), L_hat])  # rows: new x, y, z in world coordinates
@@ -406,7 +406,7 @@ class FreeSymmetricTopEnv(FreeRotorEnv):
 
     Description
         A free rigid body with I1 = I2 (about its CM) and no gravity. With zero action it is the textbook
-        torque-free symmetric top (THEORY.md S1-S4): omega circles the symmetry axis in the body frame at
+        torque-free symmetric top (docs/theory.md S1-S4): omega circles the symmetry axis in the body frame at
         Omega_b = (I3 - I1) omega3 / I1 and the axis precesses about L at |L| / I1.
 
     Observation Space

@@ -1,6 +1,6 @@
 """Gyrocompass on a turning platform: the MuJoCo side of the scenario, and its gymnasium env.
 
-Theory: THEORY.md G1 (the exact hunting equation, its small-amplitude frequency and its large-amplitude period by
+Theory: docs/theory.md G1 (the exact hunting equation, its small-amplitude frequency and its large-amplitude period by
 quadrature; H conserved), implemented in `rigidbench.analytic.gyrocompass`. Model: ``models/gyrocompass.xml``: a
 platform hinged about n = (0, cos(lat), sin(lat)) (the Earth, turning at a scaled rate Omega), a gimbal hinged
 about the platform's vertical (its angle is the azimuth alpha of the spin axis, from North towards East) and a
@@ -9,7 +9,7 @@ rotor hinged about the gimbal's horizontal y axis.
 Three choices make the model the textbook one:
 
 - The spin axis is held horizontal by the joint coordinates themselves (a hinge inside a hinge), not by a soft
-  equality or a spring, so THEORY.md G1's compliance note (an effective inertia I_t + I_g + H^2/K) does not apply:
+  equality or a spring, so docs/theory.md G1's compliance note (an effective inertia I_t + I_g + H^2/K) does not apply:
   there is no K.
 - The platform's rate stays constant because its moment of inertia I_p is huge. Its axis is a frictionless hinge, so
   I_p Omega + L_n is conserved, L_n the gyro's angular momentum along n (`analytic.gyrocompass.momentum_along_axis`);
@@ -156,7 +156,7 @@ _ALL = ("hunting-period", "mean-azimuth", "turning-angle", "momentum-drift", "pl
 @dataclass(frozen=True)
 class PlatformLatitude:
     """Latitude lat (rad) of the site: the platform's hinge axis is n = (0, cos(lat), sin(lat)) in the local East,
-    North, Up frame (THEORY.md section 0), read back from the compiled joint axis."""
+    North, Up frame (docs/theory.md section 0), read back from the compiled joint axis."""
 
     joint: str = PLATFORM
 
@@ -241,7 +241,7 @@ DOMAINS = (
 
 class GyroCompass(Scenario):
     """A fast rotor held horizontal by a gimbal free about the local vertical, on a platform turning at Omega about
-    an axis at latitude lat: the spin axis hunts about North (THEORY.md G1)."""
+    an axis at latitude lat: the spin axis hunts about North (docs/theory.md G1)."""
 
     slug = "gyrocompass"
     title = "Gyrocompass: north-seeking hunting on a turning platform"
@@ -518,7 +518,7 @@ def geometry(model: mujoco.MjModel) -> Geometry:
     Raises
     ------
     ValueError
-        If the rotor is not axisymmetric about its spin axis, or the gimbal's horizontal moments differ (THEORY.md
+        If the rotor is not axisymmetric about its spin axis, or the gimbal's horizontal moments differ (docs/theory.md
         G1 assumes both: otherwise an azimuth-dependent torque of order (difference) Omega^2 enters).
     """
     j = _joints(model)
@@ -536,7 +536,8 @@ def geometry(model: mujoco.MjModel) -> Geometry:
     i_t1, i_t2 = _moment(model, rotor, trans), _moment(model, rotor, trans2)
     if abs(i_t1 - i_t2) > 1e-12 * max(i_t1, i_t2):
         raise ValueError(
-            f"scenario 'gyrocompass': the rotor's transverse moments {i_t1:g}, {i_t2:g} kg m^2 differ; THEORY.md G1 "
+            f"scenario 'gyrocompass': the rotor's transverse moments {i_t1:g}, {i_t2:g} kg m^2 differ;"
+            f" docs/theory.md G1 "
             "needs a rotor symmetric about its spin axis"
         )
     gimbal_axis = axis[GIMBAL] / np.linalg.norm(axis[GIMBAL])
@@ -545,7 +546,8 @@ def geometry(model: mujoco.MjModel) -> Geometry:
     i_h1, i_h2 = _moment(model, gimbal, gh), _moment(model, gimbal, np.cross(gimbal_axis, gh))
     if abs(i_h1 - i_h2) > 1e-12 * max(i_h1, i_h2):
         raise ValueError(
-            f"scenario 'gyrocompass': the gimbal's horizontal moments {i_h1:g}, {i_h2:g} kg m^2 differ; THEORY.md G1 "
+            f"scenario 'gyrocompass': the gimbal's horizontal moments {i_h1:g}, {i_h2:g} kg m^2 differ;"
+            f" docs/theory.md G1 "
             "takes them equal (else an azimuth-dependent torque (difference) Omega^2 cos^2(lat) sin 2 alpha / 2 enters)"
         )
     return Geometry(
@@ -593,7 +595,7 @@ class GyrocompassEnv(ScenarioEnv):
     Description
         A rotor spinning about a horizontal axis held by a gimbal that turns freely about the local vertical, on a
         platform turning at Omega about n = (0, cos(lat), sin(lat)) (East, North, Up). With zero action it is the
-        textbook gyrocompass (THEORY.md G1): the spin axis hunts about North, ``(I_t + I_g) alpha'' = -H Omega
+        textbook gyrocompass (docs/theory.md G1): the spin axis hunts about North, ``(I_t + I_g) alpha'' = -H Omega
         cos(lat) sin(alpha) + I_t Omega^2 cos^2(lat) sin(alpha) cos(alpha)``, at ``omega_g^2 = Omega cos(lat) (H -
         I_t Omega cos(lat)) / (I_t + I_g)`` for small amplitudes.
 

@@ -1,6 +1,6 @@
 """One collision of two smooth elastic spheres: the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md C1-C5 and C8 (Wilcox Part II sections 9.6-9.9, eqs 9.16, 9.33, 9.36, 9.46, 9.53), in
+Theory: docs/theory.md C1-C5 and C8 (Wilcox Part II sections 9.6-9.9, eqs 9.16, 9.33, 9.36, 9.46, 9.53), in
 `rigidbench.analytic.scattering`. Model: ``models/hard_spheres.xml`` (two free spheres, gravity off, condim 1,
 an undamped direct-solref contact spring of stiffness k).
 
@@ -262,7 +262,7 @@ class CollisionRun(Trajectory):
 class HardSpheres(Scenario):
     """One collision of smooth elastic spheres, target at rest: CM and LAB angles, energies, both branches of a
     heavy projectile and its maximum angle, against the soft-sphere prediction and the hard-sphere closed forms
-    (THEORY.md C1-C5, C8)."""
+    (docs/theory.md C1-C5, C8)."""
 
     slug = "hard-spheres"
     title = "Hard-sphere collision (smooth, elastic, target at rest)"
@@ -641,7 +641,7 @@ class HardSpheresEnv(FreePairEnv):
         A projectile sphere (m1, r1) moving along +x at ``speed`` with impact parameter ``b`` (along +y) hits a
         target sphere (m2, r2) at rest at the origin; gravity off, frictionless, elastic. With zero action the
         relative coordinate follows the soft-contact spring V = 1/2 mu k (a - r)^2 exactly, whose deflection is
-        THEORY.md C8 and tends to the hard-sphere theta = 2 arccos(b/a) (C5) as k grows.
+        docs/theory.md C8 and tends to the hard-sphere theta = 2 arccos(b/a) (C5) as k grows.
 
     Observation Space
         Box(-inf, inf, (12,)), float64:

@@ -1,6 +1,6 @@
 """Heavy symmetric top on a fixed frictionless pivot (Lagrange top): the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md T1-T7 (Wilcox Part II section 11.10, eqs 11.52-11.62; prob. 11.13, 11.18), implemented in
+Theory: docs/theory.md T1-T7 (Wilcox Part II section 11.10, eqs 11.52-11.62; prob. 11.13, 11.18), implemented in
 `rigidbench.analytic.heavy_top`. Model: ``models/heavy_top.xml`` (a ball joint at the world origin; body z is the
 symmetry axis; the CM at ``arm`` on it).
 
@@ -203,7 +203,7 @@ _STEADY = ("tilt-deviation", "precession-rate", *_CONSERVED)
 
 class HeavyTop(Scenario):
     """A symmetric top on a fixed pivot under gravity: nutation between the roots of a cubic, steady
-    precession, the sleeping top and its threshold (THEORY.md T1-T7)."""
+    precession, the sleeping top and its threshold (docs/theory.md T1-T7)."""
 
     slug = "heavy-top"
     title = "Heavy symmetric top on a fixed pivot (Lagrange top)"
@@ -390,7 +390,7 @@ class HeavyTop(Scenario):
         data.qvel[:3] = [params["nutation_rate"], params["precession"] * np.sin(theta), params["spin"]]
 
     def motion(self, model: mujoco.MjModel, time: np.ndarray, qpos: np.ndarray, qvel: np.ndarray) -> RotorMotion:
-        """The top's motion about the pivot (inertia taken about the pivot, THEORY.md R4)."""
+        """The top's motion about the pivot (inertia taken about the pivot, docs/theory.md R4)."""
         body = model.body("top")
         i_cm = body.inertia
         h = body.ipos[2]
@@ -403,7 +403,7 @@ class HeavyTop(Scenario):
         i1, _, i3 = m.inertia_B
         R = m.R_WB[0]
         w1, w2, spin = m.omega_B[0]
-        # From the state, without cancellation (THEORY.md section 0, eq. 11.38 inverted):
+        # From the state, without cancellation (docs/theory.md section 0, eq. 11.38 inverted):
         # sin(theta) = |(R31, R32)|, sin(theta) theta_dot = w1 R32 - w2 R31, sin^2(theta) phi_dot = w1 R31 + w2 R32.
         s = float(np.hypot(R[2, 0], R[2, 1]))
         tilt = float(np.arctan2(s, R[2, 2]))
@@ -459,7 +459,8 @@ class HeavyTop(Scenario):
         u_dot = np.cross(m.omega_W, e3)[:, 2]
         u = e3[:, 2]
         phi = np.unwrap(np.arctan2(e3[:, 0], -e3[:, 1]))
-        # sin^2(theta) phi_dot = omega1 R31 + omega2 R32 (THEORY.md section 0 inverted), free of the cancellation of
+        # sin^2(theta) phi_dot = omega1 R31 + omega2 R32 (docs/theory.md section 0 inverted), free of the cancellation
+        # of
         # (omega_z - omega3 u) / (1 - u^2) near the vertical
         R = m.R_WB
         sin2_phi_dot = m.omega_B[:, 0] * R[:, 2, 0] + m.omega_B[:, 1] * R[:, 2, 1]  # smooth, unlike phi_dot
@@ -579,7 +580,7 @@ class HeavyTopEnv(RotorEnv):
 
     Description
         A symmetric top on a frictionless ball-joint pivot at the origin, under gravity. With zero action it
-        is the Lagrange top (THEORY.md T1-T7): theta(t) follows u = cos(theta) = u1 + (u2 - u1) sn^2(nu t, k).
+        is the Lagrange top (docs/theory.md T1-T7): theta(t) follows u = cos(theta) = u1 + (u2 - u1) sn^2(nu t, k).
 
     Observation Space
         See `RotorEnv`: body-to-world quaternion of the ball joint (4) and body-frame angular velocity (3,

@@ -56,7 +56,7 @@ FALLING_TILT = 1e-4
 
 
 def _pivot_inertia(p: Mapping[str, Any]) -> float:
-    return p["I1"] + p["mass"] * p["arm"] ** 2  # parallel axes, THEORY.md R4
+    return p["I1"] + p["mass"] * p["arm"] ** 2  # parallel axes, docs/theory.md R4
 
 
 def _mgh(p: Mapping[str, Any]) -> float:

@@ -1,7 +1,7 @@
-"""The meter stick on ice with two marbles (THEORY.md P6): struck so that its centre of percussion is at marble A,
+"""The meter stick on ice with two marbles (docs/theory.md P6): struck so that its centre of percussion is at marble A,
 it leaves A alone and knocks C away; struck elsewhere, it pushes A. The MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md P6 (Harter, Unit 6 Ch. 2: the "Zamboni ice shot"; the figure is lost, this is THEORY.md's
+Theory: docs/theory.md P6 (Harter, Unit 6 Ch. 2: the "Zamboni ice shot"; the figure is lost, this is docs/theory.md's
 reconstruction, rule 2: a marble at the stick's end is undisturbed if the stick is struck at h = l/3 from the
 centre, l = L/2), P1-P2 for the stick's velocity field after the blow, and P5 for each marble's collision with
 the moving stick (`rigidbench.analytic.percussion.stick_hits_ball`).
@@ -162,7 +162,7 @@ def marble_settings(params: Mapping[str, Any]) -> dict[str, Derived]:
 
 class MarbleShot(Scenario):
     """The meter stick on ice between marbles A (one end) and C (the other): struck at offset L/6 toward C, its
-    centre of percussion sits at A and A stays put while C flies off (THEORY.md P6)."""
+    centre of percussion sits at A and A stays put while C flies off (docs/theory.md P6)."""
 
     slug = "marble-shot"
     title = "Meter stick on ice with marbles: struck so the centre of percussion is at A, A stays, C flies"
@@ -336,7 +336,7 @@ class MarbleShotEnv(BlowEnv):
         A uniform stick (``mass``, ``length``) lies on frictionless ice along world y with marble A 1 mm in front
         of one end and marble C 1 mm in front of the other. ``reset`` strikes it toward the marbles (a 5 us
         pulse of impulse ``impulse`` at ``offset`` from its centre, on C's side). With zero action, struck at L/6
-        (THEORY.md P6), its centre of percussion is at A's end: A stays put while C is knocked away.
+        (docs/theory.md P6), its centre of percussion is at A's end: A stays put while C is knocked away.
 
     Observation Space
         See `BlowEnv`: the *stick's* CM position (x, y) (m), heading (rad), CM velocity (v_x, v_y) (m/s) and

@@ -1,6 +1,6 @@
 """Simple pendulum at any amplitude: the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md O1 (exact period ``4 sqrt(l/g) K(sin(a/2))``) and O2 (physical pendulum: l -> I_O/(M h)),
+Theory: docs/theory.md O1 (exact period ``4 sqrt(l/g) K(sin(a/2))``) and O2 (physical pendulum: l -> I_O/(M h)),
 implemented in `rigidbench.analytic.pendulum`. Model: ``models/pendulum.xml`` (one hinge about world y at
 the origin, a point bob at ``length`` below it).
 """
@@ -51,7 +51,7 @@ _ALL = ("period", "turning-angle", "energy-drift")
 
 
 class Pendulum(Scenario):
-    """A simple pendulum released from rest, from small amplitudes to 3 rad (THEORY.md O1, O2)."""
+    """A simple pendulum released from rest, from small amplitudes to 3 rad (docs/theory.md O1, O2)."""
 
     slug = "pendulum"
     title = "Simple pendulum at any amplitude (exact elliptic period)"
@@ -139,7 +139,7 @@ class SimplePendulumEnv(PendulumEnv):
 
     Description
         A point bob on a massless rod, hinged about the world y axis, released from rest at ``amplitude``. With
-        zero action it is the textbook pendulum (THEORY.md O1): ``sin(th/2) = k cd(omega0 t, k)``, ``k =
+        zero action it is the textbook pendulum (docs/theory.md O1): ``sin(th/2) = k cd(omega0 t, k)``, ``k =
         sin(amplitude/2)``, period ``4 K(k)/omega0``. (The id avoids gymnasium's ``Pendulum-v1``, a torque-
         limited swing-up task.)
 

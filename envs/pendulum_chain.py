@@ -1,6 +1,6 @@
 """Chain of N identical pendulums with nearest-neighbour springs: the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md O5 (``omega_r^2 = g/l + 4 kappa sin^2(r pi / 2N)``, ``kappa = k d^2 / (m l^2)``, shapes
+Theory: docs/theory.md O5 (``omega_r^2 = g/l + 4 kappa sin^2(r pi / 2N)``, ``kappa = k d^2 / (m l^2)``, shapes
 ``cos(r pi (j + 1/2) / N)``) and O7 (``det(V - omega^2 T) = 0``, Wilcox Part II section 12.2, eqs 12.15-12.26),
 implemented in `rigidbench.analytic.oscillations`. Model: ``models/pendulum_chain.xml``, a one-pendulum template
 from which `rigidbench.envs.pendulums.ChainSize` builds the chain through `mujoco.MjSpec`.
@@ -140,7 +140,7 @@ _REGIME_TEXT = (
 
 
 class PendulumChain(Scenario):
-    """N identical pendulums in a row, neighbours coupled by springs, free ends: every normal mode (THEORY.md
+    """N identical pendulums in a row, neighbours coupled by springs, free ends: every normal mode (docs/theory.md
     O5, O7)."""
 
     slug = "pendulum-chain"
@@ -398,7 +398,7 @@ class PendulumChainEnv(PendulumEnv):
         ``n`` identical point-bob pendulums hinged about the world y axis in a row along x (pivots 0.5 m apart),
         each neighbouring pair joined by a linear spring (stiffness ``k``) attached at ``d`` below the pivots,
         relaxed at equilibrium; the ends are free. With zero action the motion is a superposition of the N
-        normal modes of THEORY.md O5/O7: ``omega_r^2 = M g l / I_O + 4 k d^2 sin^2(r pi / 2N) / I_O``, shapes
+        normal modes of docs/theory.md O5/O7: ``omega_r^2 = M g l / I_O + 4 k d^2 sin^2(r pi / 2N) / I_O``, shapes
         ``cos(r pi (j + 1/2) / N)``.
 
     Observation Space

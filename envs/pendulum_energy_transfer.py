@@ -1,4 +1,5 @@
-"""``rigidbench/PendulumEnergyTransfer-v0``: drive pendulum 1 so that the energy ends in pendulum 2 (THEORY.md O3-O4).
+"""``rigidbench/PendulumEnergyTransfer-v0``: drive pendulum 1 so that the energy ends in pendulum 2 (docs/theory.md
+O3-O4).
 
 Built on the `CoupledPendulums` scenario (model, parameters, the ``beats`` case's initial state, the normal-mode
 frequencies it predicts) and the pendulum env plumbing (observation, torque on pendulum 1).
@@ -37,7 +38,7 @@ def bang_bang_schedule(
     nsteps: int,
 ) -> tuple[np.ndarray, float]:
     """The torques on pendulum 1, one per hold interval, that maximise pendulum 2's energy at ``nsteps * hold``
-    in the linearised model (THEORY.md O3), and that energy (J).
+    in the linearised model (docs/theory.md O3), and that energy (J).
 
     Linear model: normal coordinates q_s = (th1 + th2)/2, q_a = (th1 - th2)/2 obey I q_s'' = -I omega_s^2 q_s
     + u/2 and I q_a'' = -I omega_a^2 q_a + u/2 (O3), so th2 = q_s - q_a responds to a unit impulse on pendulum 1

@@ -6,11 +6,11 @@ the world y axis at its body origin by the joint ``hinge<i>``; its bob is a poin
 at ``(0, 0, -l)``, marked by the site ``bob<i>``; a spring attachment is the site ``spring<i>`` at ``(0, 0, -d)``.
 A positive angle turns the bob towards -x. Springs are spatial tendons of the default class ``spring``, with
 ``springlength="-1"``: MuJoCo takes the rest length from the reference configuration, so every spring is
-relaxed at equilibrium (THEORY.md O3). Visual geoms carry no mass (house rule 7).
+relaxed at equilibrium (docs/theory.md O3). Visual geoms carry no mass (house rule 7).
 
 MuJoCo refuses a moving body with zero inertia, so each bob carries ``diaginertia`` 1e-9 kg m^2, a part in 1e9
 of ``m l^2`` at the defaults. It is not neglected: every prediction takes the pivot moment ``I_O = I_yy + m
-l^2`` read back from the compiled model (THEORY.md O2).
+l^2`` read back from the compiled model (docs/theory.md O2).
 """
 
 from __future__ import annotations
@@ -279,7 +279,7 @@ class Pendulum:
 
     @property
     def inertia_pivot(self) -> float:
-        """I_O = I_cm + m l^2 (kg m^2), THEORY.md O2 / R4."""
+        """I_O = I_cm + m l^2 (kg m^2), docs/theory.md O2 / R4."""
         return self.inertia_cm + self.mass * self.length**2
 
 
@@ -371,7 +371,7 @@ def modal_amplitudes(t: np.ndarray, angles: np.ndarray, omegas: Iterable[float],
 
     Fits ``th_j(t) = sum_r Re(z_jr e^{i omega_r t})`` (linear in z, omegas given, e.g. measured) to every
     `stride`-th sample. Returns z, shape (n_pendulums, n_modes). A pure normal mode r has z_jr = a_jr c_r: all
-    pendulums in phase or in anti-phase (THEORY.md O7).
+    pendulums in phase or in anti-phase (docs/theory.md O7).
     """
     omegas = np.asarray(list(omegas), dtype=float)
     ts = t[::stride, None]

@@ -1,6 +1,6 @@
 """``rigidbench/PercussionStrike-v0``: strike the stick so that marble A stays put and marble C flies at a target speed.
 
-Built on the `MarbleShot` scenario (THEORY.md P6): its model (meter stick on ice, marbles A and C in front of its
+Built on the `MarbleShot` scenario (docs/theory.md P6): its model (meter stick on ice, marbles A and C in front of its
 ends), its blow (a short pulse at ``offset`` of ``impulse``), its measurement of the marbles' speeds and the
 percussion closed forms of `rigidbench.analytic.percussion` (P1, P2, P5).
 """

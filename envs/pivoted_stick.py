@@ -1,7 +1,7 @@
 """A stick on a frictionless pivot at one end, struck perpendicularly: the pivot's reaction impulse, and the
 sweet spot where it vanishes. The MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md P4 (J = Pi (M d_cm d / I_O - 1), zero at d* = I_O / (M d_cm) = 2L/3 for a uniform rod: the centre
+Theory: docs/theory.md P4 (J = Pi (M d_cm d / I_O - 1), zero at d* = I_O / (M d_cm) = 2L/3 for a uniform rod: the centre
 of percussion referred to the pivot, the equivalent length of the physical pendulum, Wilcox prob. 11.7),
 implemented in `rigidbench.analytic.percussion`.
 Model: ``models/pivoted_stick.xml``: a free stick pinned at its end to the world by a soft equality constraint
@@ -12,7 +12,7 @@ Measurement: the pivot's reaction impulse along the blow is what the pin added t
 J = M V_cm,x - Pi (the pulse's own impulse is exactly Pi), read once the soft pin has settled, 10 of its time
 constants after the pulse; by then the stick has turned by omega t', so the rigid prediction for that instant,
 M omega d_cm cos(omega t') - Pi, is what is compared (t' from the pulse's centroid).
-Conventions: THEORY.md section 6 and P4: the stick lies along +y from the pivot; J > 0 along +x.
+Conventions: docs/theory.md section 6 and P4: the stick lies along +y from the pivot; J > 0 along +x.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ _PIN = (
     "0.2 ms at the end-struck default, so omega tc <= 2.4e-3 everywhere); read 10 pin time constants after the "
     "pulse, when the soft pin's response has decayed to "
     "~10 e^-10 ~ 5e-4 of its load and the pin yields only ~ a tc^2 ~ 1e-8 m (measured residuals <= 5e-8); "
-    "the pulse's O(omega tau) share (THEORY.md F2 saw 5.3e-5 Pi with a 2 ms pulse read at its end) is "
+    "the pulse's O(omega tau) share (docs/theory.md F2 saw 5.3e-5 Pi with a 2 ms pulse read at its end) is "
     "O((omega tau)^2) ~ 1e-7 here, read after the pin has settled"
 )
 CHECKS = (
@@ -104,7 +104,7 @@ PIVOT_DRIFT = 1e-6
 
 class PivotedStick(Scenario):
     """A uniform stick pinned at one end, struck perpendicularly at ``strike`` from the pivot: the pivot's
-    reaction impulse against the strike distance, zero at the sweet spot 2L/3 (THEORY.md P4)."""
+    reaction impulse against the strike distance, zero at the sweet spot 2L/3 (docs/theory.md P4)."""
 
     slug = "pivoted-stick"
     title = "Stick on a pivot struck perpendicularly: pivot reaction impulse, sweet spot at 2L/3"
@@ -210,7 +210,7 @@ class PivotedStick(Scenario):
     def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
         body = model.body("stick")
         mass, d_cm = float(body.mass[0]), float(body.ipos[1])
-        inertia_pivot = float(body.inertia[2]) + mass * d_cm**2  # parallel axes, THEORY.md R4
+        inertia_pivot = float(body.inertia[2]) + mass * d_cm**2  # parallel axes, docs/theory.md R4
         strike = float(model.site("strike").pos[1])
         impulse = float(model.numeric("impulse").data[0])
         tau = pulse.duration(model)
@@ -258,7 +258,7 @@ class PivotedStickEnv(BlowEnv):
     Description
         A uniform stick (``mass``, ``length``) is pinned at one end to a frictionless pivot on the ice. ``reset``
         strikes it: a 0.1 ms force pulse of impulse ``impulse`` along +x at ``strike`` from the pivot. With zero
-        action it then swings at omega = -Pi d / I_O about the pivot (THEORY.md P4), the pivot having given the
+        action it then swings at omega = -Pi d / I_O about the pivot (docs/theory.md P4), the pivot having given the
         reaction impulse J = Pi (M d_cm d / I_O - 1) (zero at d = 2L/3).
 
     Observation Space

@@ -2,7 +2,7 @@
 
 Model conventions (``models/foucault.xml``, ``models/eastward_deflection.xml``): the body ``platform`` turns on
 the hinge ``spin`` about the axis (0, cos lambda, sin lambda) of its own frame, which is the local East-North-Up
-frame at latitude lambda (THEORY.md section 0) and coincides with the world frame at t = 0. MuJoCo's gravity is
+frame at latitude lambda (docs/theory.md section 0) and coincides with the world frame at t = 0. MuJoCo's gravity is
 off; gravity is the uniform field (0, 0, -g) fixed in the platform's axes, declared as rigidbench.forces'
 ``rigidbench:frame-field`` (text: ``platform`` then the bodies that feel it; numeric: the field). The platform's
 rate Omega is the hinge's initial velocity, the custom numeric ``rate``.

@@ -1,6 +1,6 @@
 """Repulsive Coulomb (Rutherford) scattering off a free target: the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md C7 (tan(theta/2) = k / (mu v^2 b), Rutherford's cross section; Wilcox Part II eqs 9.12-9.17),
+Theory: docs/theory.md C7 (tan(theta/2) = k / (mu v^2 b), Rutherford's cross section; Wilcox Part II eqs 9.12-9.17),
 C1-C4 (LAB angles and energies, eqs 9.33-9.53), C6 (LAB cross sections) and C9 (the LAB orbit has no asymptote),
 in `rigidbench.analytic.coulomb`. Model: ``models/rutherford.xml``: two free point masses with the inverse-square
 pair force of `rigidbench.forces` (added in mjcb_passive, so at every RK4 stage); a beam is n such pairs in one
@@ -260,7 +260,7 @@ def _regime_separation(low: float) -> dict[str, Range]:
 class Rutherford(RutherfordPhysics):
     """Repulsive Coulomb scattering of a projectile off a free target at any mass ratio: CM deflection against
     the impact parameter, LAB angles and energies, the largest LAB angle, the head-on closest approach, a Monte
-    Carlo beam against Rutherford's 1/sin^4(theta/2), and the LAB orbit's missing asymptote (THEORY.md C1-C4, C6,
+    Carlo beam against Rutherford's 1/sin^4(theta/2), and the LAB orbit's missing asymptote (docs/theory.md C1-C4, C6,
     C7, C9)."""
 
     slug = "rutherford"
@@ -596,7 +596,7 @@ class RutherfordEnv(FreePairEnv):
     Description
         A projectile (m1) comes in along +x at ``speed`` with impact parameter ``b`` (along +y) towards a free
         target (m2), at rest long before; they repel with U = k / r (`rigidbench.forces`). With zero action the
-        relative coordinate r = x1 - x2 follows the exact hyperbola of THEORY.md C7 (`coulomb.relative_orbit`):
+        relative coordinate r = x1 - x2 follows the exact hyperbola of docs/theory.md C7 (`coulomb.relative_orbit`):
         deflection tan(theta / 2) = k / (mu v^2 b). The episode starts and ends at ``separation`` times the closest
         approach (the orbit placed on its exact hyperbola there).
 

@@ -2,7 +2,7 @@
 
 Built on the `HardSpheres` scenario: its model (two smooth elastic spheres, an undamped contact spring), its
 initial state (projectile aimed at impact parameter b), its measurement of the outgoing LAB angle
-(`HardSpheres.outgoing`) and the closed forms of `rigidbench.analytic.scattering` (THEORY.md C2, C3, C5).
+(`HardSpheres.outgoing`) and the closed forms of `rigidbench.analytic.scattering` (docs/theory.md C2, C3, C5).
 """
 
 from __future__ import annotations

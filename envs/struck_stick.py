@@ -1,12 +1,12 @@
 """A uniform stick on frictionless ice struck perpendicularly off-centre: the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md P1-P3 (Harter, Unit 6 Ch. 2 slides, Fig. 2.4.1: "linear momentum Pi and angular momentum Pi h";
+Theory: docs/theory.md P1-P3 (Harter, Unit 6 Ch. 2 slides, Fig. 2.4.1: "linear momentum Pi and angular momentum Pi h";
 "p = I/(Mh)"; the centre of percussion traces a common cycloid), implemented in `rigidbench.analytic.percussion`.
 Model: ``models/struck_stick.xml``: a free stick along body y, no gravity (frictionless ice); the blow is a
 rectangular force pulse (`rigidbench.pulse`) of ``impulse`` along world +x, applied at the material point
 ``offset`` from the centre by a site actuator; measured right after the pulse ends.
 
-Conventions: THEORY.md section 6: the stick lies along +y, its CM at the origin; the blow at s = +h along +x
+Conventions: docs/theory.md section 6: the stick lies along +y, its CM at the origin; the blow at s = +h along +x
 turns it clockwise, omega_z = -Pi h / I; the centre of percussion is the point s = -p on the far side.
 """
 
@@ -100,7 +100,7 @@ def _inertia(model: mujoco.MjModel) -> float:
 
 class StruckStick(Scenario):
     """A free uniform stick on frictionless ice struck perpendicularly at ``offset`` from its centre: the CoM
-    and spin just after the blow, the centre of percussion at rest, its cycloid (THEORY.md P1-P3)."""
+    and spin just after the blow, the centre of percussion at rest, its cycloid (docs/theory.md P1-P3)."""
 
     slug = "struck-stick"
     title = "Stick on frictionless ice struck off-centre: centre of percussion and cycloid"
@@ -145,7 +145,9 @@ class StruckStick(Scenario):
         Case(
             "quarter", "struck L/4 from the centre: p = L/3, on the stick", {"offset": lambda p: p["length"] / 4}, _ALL
         ),
-        Case("end", "struck at the end: p = L/6 (THEORY.md P6 rule 2)", {"offset": lambda p: p["length"] / 2}, _ALL),
+        Case(
+            "end", "struck at the end: p = L/6 (docs/theory.md P6 rule 2)", {"offset": lambda p: p["length"] / 2}, _ALL
+        ),
         Case(
             "near-centre",
             "struck L/20 from the centre: p = 5L/3, the centre of percussion lies off the stick",
@@ -234,7 +236,7 @@ class StruckStickEnv(BlowEnv):
         A uniform stick (mass ``mass``, length ``length``) lies on frictionless ice along world y. ``reset``
         strikes it: a force pulse of impulse ``impulse`` along +x at ``offset`` from its centre, lasting
         ``pulse_duration`` (2.4e-3 / |omega| rounded down: 0.1 ms at the default end strike). With zero action
-        it then moves as THEORY.md P1-P3 say: the CM at V = Pi/M, turning at omega = -Pi h/I, the point s = -p =
+        it then moves as docs/theory.md P1-P3 say: the CM at V = Pi/M, turning at omega = -Pi h/I, the point s = -p =
         -I/(M h) tracing a cycloid.
 
     Observation Space

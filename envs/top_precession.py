@@ -1,4 +1,4 @@
-"""``rigidbench/TopPrecession-v0``: torque a heavy top from rest tilt into steady precession (THEORY.md T4).
+"""``rigidbench/TopPrecession-v0``: torque a heavy top from rest tilt into steady precession (docs/theory.md T4).
 
 Built on the `HeavyTop` scenario (model, parameters, initial state of its ``nutation`` case) and its rotor
 env plumbing (observation, torque action); the target state is T4's slow steady precession.
@@ -30,7 +30,7 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
     Description
         The heavy symmetric top of ``rigidbench/HeavyTop-v0`` (ball-joint pivot, gravity) starts at tilt theta0
         from the upward vertical, spinning at omega3 about its axis with theta_dot = phi_dot = 0. Left alone it
-        nutates (cusped, THEORY.md T2-T3). The task: apply a bounded torque so that it precesses steadily at
+        nutates (cusped, docs/theory.md T2-T3). The task: apply a bounded torque so that it precesses steadily at
         theta0 at the slow T4 rate, the root of ``I1 cos(theta0) phi_dot^2 - I3 omega3 phi_dot + M g h = 0``
         (I1 about the pivot). Steady precession is a free motion: once reached, it needs no torque.
 
@@ -123,7 +123,7 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
     def load(self, case: str, params) -> None:
         super().load(case, params)
         motion = self.scenario.motion(self.model, np.zeros(1), self.data.qpos[None], self.data.qvel[None])
-        self._inertia = motion.inertia_B  # about the pivot (THEORY.md R4)
+        self._inertia = motion.inertia_B  # about the pivot (docs/theory.md R4)
         self._mgh = self.scenario._mgh(self.model)
         self._R = np.empty((3, 3))
         self._R9 = self._R.reshape(9)  # a view: what mju_quat2Mat fills

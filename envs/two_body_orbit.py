@@ -1,6 +1,6 @@
 """Two free bodies under a central force, in the LAB and CM views: the MuJoCo side, and its gymnasium env.
 
-Theory: THEORY.md K1-K5 (Wilcox Part II chapter 8, eqs 8.33-8.39, 8.64-8.78, 8.118, 8.132-8.137, 8.148; Harter's
+Theory: docs/theory.md K1-K5 (Wilcox Part II chapter 8, eqs 8.33-8.39, 8.64-8.78, 8.118, 8.132-8.137, 8.148; Harter's
 "Ptolemaic vs Copernican views" and CoulIt pictures, seed 001), in `rigidbench.analytic.orbits`. Model:
 ``models/two_body_orbit.xml``: two free bodies, gravity off, joined either by a zero-length spatial tendon spring
 (Hooke, native MuJoCo) or by an inverse-square attraction declared for `rigidbench.forces` (Kepler, added by
@@ -329,7 +329,8 @@ _KEPLER_REGIME = (
 class TwoBodyOrbit(Scenario):
     """Two free bodies bound by a zero-length spring or an inverse-square attraction, read in the LAB and CM frames:
     periods, eccentricities and semi-axes of both CM-frame orbits (mass-scaled copies of the relative orbit), the CM
-    moving uniformly, conservation, energy partition, the virial theorem and the apsidal angle (THEORY.md K1-K5)."""
+    moving uniformly, conservation, energy partition, the virial theorem and the apsidal angle (docs/theory.md
+    K1-K5)."""
 
     slug = "two-body-orbit"
     title = "Two-body orbits, LAB vs CM (Kepler and Hooke)"
@@ -689,7 +690,7 @@ class TwoBodyOrbitEnv(FreePairEnv):
     Description
         Two free bodies (m1, m2), gravity off, attracted by a zero-length spring (U = k r^2/2) or an inverse-square
         force (U = -k/r), started at an apsis of their relative orbit with the CM at rest or moving. With zero
-        action it is the textbook two-body problem (THEORY.md K1-K5): the CM moves uniformly and the relative
+        action it is the textbook two-body problem (docs/theory.md K1-K5): the CM moves uniformly and the relative
         coordinate r = x1 - x2 follows Kepler's equation (K2) or the isotropic oscillator (K3).
 
     Observation Space

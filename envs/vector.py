@@ -27,7 +27,8 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
-from rigidbench import engines
+from rigidbench.engines import registry as engine_registry
+from rigidbench.engines.vector import Worlds, worlds
 from rigidbench.envs.base import DEVIATION_CAP, ScenarioEnv, capped_reward
 
 
@@ -82,7 +83,7 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
                 'gymnasium\'s sync or async vector env (vectorization_mode="sync")'
             )
         self.num_envs = int(num_envs)
-        self._engine = engines.engine_for(engine, device=device, precision=precision)
+        self._engine = engine_registry.engine_for(engine, device=device, precision=precision)
         self._nthread = nthread
         self.env = env_cls(**env_kwargs)  # the template: resolves, builds, predicts and scores through its hooks
         self._hooks = batched_hooks(self.env)
@@ -95,7 +96,7 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.metadata = {**self.env.metadata, "autoreset_mode": AutoresetMode.NEXT_STEP}
         self.render_mode = None
-        self.worlds: engines.Worlds | None = None  # the batch of the template's current model
+        self.worlds: Worlds | None = None  # the batch of the template's current model
         self._options: dict[str, Any] = {}
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._k = np.zeros(self.num_envs, dtype=np.int64)
@@ -118,7 +119,7 @@ class VectorScenarioEnv(gym.vector.VectorEnv):
         if self.worlds is None or self.worlds.model is not env.model:  # a new case or parameters: a new batch
             if self.worlds is not None:
                 self.worlds.close()
-            self.worlds = engines.worlds(self._engine, env.model, self.num_envs, nthread=self._nthread)
+            self.worlds = worlds(self._engine, env.model, self.num_envs, nthread=self._nthread)
         if self._single:
             self.worlds.load(_ONE, env.data)
             return obs, info

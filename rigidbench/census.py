@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from rigidbench import registry
-from rigidbench.engines import EngineRefused
+from rigidbench.engines.base import EngineRefused
 from rigidbench.params import Bound, Param, Range, Value
 from rigidbench.results import DIVERGED, ERROR, FAIL, PASS, UNRESOLVED
 from rigidbench.runner import Job, RunResult, check_job

@@ -354,7 +354,8 @@ def refuse_on(engine: str, model: mujoco.MjModel) -> None:
     rigidbench.engines.EngineRefused
         Naming the engine and the forces.
     """
-    from rigidbench.engines import EngineRefused
+    # Imported here: loading `rigidbench.engines` loads its adapters, which import this module.
+    from rigidbench.engines.base import EngineRefused
 
     laws = declared(model)
     if laws:

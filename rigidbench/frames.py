@@ -1,7 +1,7 @@
 """Frames and rotations, vectorised over time.
 
 Quaternions are MuJoCo's (w, x, y, z), body-to-world. `R_WB` maps body-frame components to world-frame ones.
-Euler angles follow THEORY.md section 0 (z-x-z, Goldstein = Wilcox section 11.7): R = Rz(phi) Rx(theta) Rz(psi).
+Euler angles follow docs/theory.md section 0 (z-x-z, Goldstein = Wilcox section 11.7): R = Rz(phi) Rx(theta) Rz(psi).
 """
 
 from __future__ import annotations

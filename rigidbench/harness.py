@@ -27,7 +27,9 @@ import numpy as np
 
 from rigidbench import forces, pulse
 from rigidbench.contract import BUILD_LOCK, PER_CHECK, UNRESOLVED_FRACTION, Case, Check, OutsideDomain, Params, Scenario
-from rigidbench.engines import use as use_engine
+from rigidbench.engines.base import Engine, EngineRefused
+from rigidbench.engines.base import use as use_engine
+from rigidbench.engines.precision import advance_error, roundoff_floor, stored, stored_model, stored_state
 from rigidbench.params import Bound, Value, check_known
 from rigidbench.settings import DERIVED_TEXT, Settings, read_settings, skip_idle_stages
 from rigidbench.simulate import Timing, Trajectory, check_run_size, simulate, steps_for, time_calls, time_stepping
@@ -129,7 +131,6 @@ def roundoff_check(
     `UNRESOLVED_FRACTION` of the quantity itself (1 for a relative or dimensionless check, else the expected
     value's size), float32 alone could move it that much: the check is reported as unresolved, not scored.
     """
-    from rigidbench.engines import roundoff_floor
 
     secular = check.name in prediction.get("_roundoff_secular", ())
     floor, rule = roundoff_floor(precision, nstep, scenario.roundoff_scale(check.name, prediction), secular=secular)
@@ -289,7 +290,6 @@ def check_precision(
     rigidbench.engines.EngineRefused
         Naming the scenario, the engine and its precision, and the numbers.
     """
-    from rigidbench.engines import EngineRefused, advance_error
 
     if precision == "float64":
         return
@@ -309,7 +309,6 @@ def check_precision(
 def settings_record(model: mujoco.MjModel, settings: Settings | None) -> dict:
     """The settings a compiled model runs with, read back in full (`read_settings`), and the engine's
     record (name, version, device, precision) that every result row carries."""
-    from rigidbench.engines import Engine
 
     engine = (settings.engine_object() if settings is not None else None) or Engine()
     return {**read_settings(model), **engine.record()}
@@ -372,7 +371,6 @@ def prepare(
     if engine is not None and engine.precision != "float64":
         # Predict from what the engine simulates: the model and initial state rounded to its precision
         # (`rigidbench.engines.stored`); the parameters reported are read back from it.
-        from rigidbench.engines import stored
 
         model, data = stored(model, data, engine.precision)
         actual = scenario.read_params(model)
@@ -488,7 +486,6 @@ def settings_for(profile_name: str, *, integrator: str | None = None, timestep: 
 
 def env_model(scenario: Scenario, params: Mapping[str, Value], settings: Settings, precision: str) -> mujoco.MjModel:
     """The model an env steps: built (`build`) and stored in `precision` (`rigidbench.engines.stored_model`)."""
-    from rigidbench.engines import stored_model
 
     return stored_model(scenario.build(params, settings), precision)
 
@@ -502,7 +499,6 @@ def env_start(scenario: Scenario, model: mujoco.MjModel, precision: str, engine:
     rigidbench.engines.EngineRefused
         If `engine`'s `precision` cannot resolve the start (`check_precision`).
     """
-    from rigidbench.engines import stored_state
 
     actual = scenario.read_params(model)
     data = scenario.start(model, actual)

@@ -27,6 +27,7 @@ import mujoco
 from rigidbench import plots, registry
 from rigidbench.results import DIVERGED, PASS
 from rigidbench.settings import Settings
+from rigidbench.theory import THEORY_PAGE, theory_link, theory_ref
 
 
 def load(paths: Sequence[str]) -> tuple[list[dict[str, Any]], list[dict[str, Any]], list[dict[str, Any]]]:
@@ -242,7 +243,17 @@ def _page(rows, runs, sweeps, versions, figures, audits=()) -> str:
         "</select></p>",
     ]
     if rows:
-        out += ["<h2>Settings</h2>", _settings_table(rows), "<h2>Results</h2>", _results_table(rows)]
+        out += [
+            "<h2>Settings</h2>",
+            _settings_table(rows),
+            "<h2>Results</h2>",
+            f"<p class=meta>Each theory ID links to its entry (closed form, conventions, domain, source) in "
+            f"<code>{THEORY_PAGE}</code> of the rigidbench repository. The links are relative to the repository's "
+            f"root: they open from a report written there (<code>rigidbench report --out report.html</code> in a "
+            f"clone); elsewhere, open <code>{THEORY_PAGE}</code> and find the ID's heading. Hover a row for the "
+            f"check's theory and tolerance in words.</p>",
+            _results_table(rows),
+        ]
     for slug in all_slugs:
         mine = [(f, d) for s, f, d in figures if s == slug]
         if not mine:
@@ -391,7 +402,18 @@ def _setting(value) -> str:
 def _results_table(rows) -> str:
     head = "".join(
         f"<th>{h}</th>"
-        for h in ("scenario:case", "check", "measured", "expected", "unit", "error", "tolerance", "verdict", "mujoco")
+        for h in (
+            "scenario:case",
+            "check",
+            "theory",
+            "measured",
+            "expected",
+            "unit",
+            "error",
+            "tolerance",
+            "verdict",
+            "mujoco",
+        )
     )
     body = []
     for r in rows:
@@ -404,11 +426,21 @@ def _results_table(rows) -> str:
         body.append(
             f'<tr class="{html.escape(r["status"])}" data-scenario="{html.escape(r["scenario"])}" title="{title}">'
             f"<td>{html.escape(r['scenario'])}:{html.escape(r['case'])}</td><td>{html.escape(r['check'])}</td>"
+            f"<td>{_theory_cell(r)}</td>"
             f"<td class=n>{_num(r.get('measured'))}</td><td class=n>{_num(r.get('expected'))}</td>"
             f"<td>{html.escape(r.get('unit') or '')}</td><td class=n>{err}</td><td>{tol}</td>"
             f"<td class=verdict>{verdict}</td><td>{html.escape(str(r['settings'].get('mujoco', '')))}</td></tr>"
         )
     return f"<table id=results><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
+
+
+def _theory_cell(row: Mapping[str, Any]) -> str:
+    """The row's theory ID as a link to its entry on the theory page (`rigidbench.theory.theory_link`), relative
+    to the repository root; a document written before rows carried ``theory_ref`` gets it from ``theory``."""
+    ref = row.get("theory_ref") or theory_ref(row.get("theory") or "")
+    if not ref:
+        return "-"
+    return f'<a href="{html.escape(theory_link(ref))}">{html.escape(ref)}</a>'
 
 
 def _orders_table(doc) -> str:

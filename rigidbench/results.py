@@ -1,7 +1,8 @@
 """Result rows and their formats: JSON for machines, JUnit XML for CI, a text table for people.
 
 One row per check (DESIGN.md "Results"): scenario, case, check, unit, measured, expected, error, tolerance
-(with its kind and reason), status, settings, params, and the MuJoCo and rigidbench versions. A case whose
+(with its kind and reason), theory (the check's words) and theory_ref (its first equation ID, whose entry is
+``docs/theory.md#<id lowercased>``), status, settings, params, and the MuJoCo and rigidbench versions. A case whose
 simulation diverged yields a single row with status ``"diverged"``, ``passed = None`` and the time it
 happened: it is never scored against theory. A case whose run raised an exception (a defect of rigidbench, never
 of the physics) yields a single row with status ``"error"`` and the exception in ``message``.
@@ -19,6 +20,7 @@ from typing import Any
 import mujoco
 
 from rigidbench.scenario import CaseRun
+from rigidbench.theory import theory_ref
 
 PASS, FAIL, DIVERGED, ERROR = "pass", "fail", "diverged", "error"
 # A check the engine's float precision cannot resolve (`rigidbench.scenario.UNRESOLVED_FRACTION`): reported, not
@@ -54,6 +56,7 @@ def rows_of(run: CaseRun) -> list[dict[str, Any]]:
                 "tolerance_kind": None,
                 "tolerance_reason": None,
                 "theory": None,
+                "theory_ref": None,
                 "status": DIVERGED,
                 "passed": None,
                 "diverged_at": run.diverged_at,
@@ -71,6 +74,7 @@ def rows_of(run: CaseRun) -> list[dict[str, Any]]:
             "tolerance_kind": o.check.kind,
             "tolerance_reason": o.check.reason,
             "theory": o.check.theory,
+            "theory_ref": theory_ref(o.check.theory),
             "status": UNRESOLVED if o.unresolved else PASS if o.passed else FAIL,
             "passed": None if o.unresolved else o.passed,
             "diverged_at": None,
@@ -182,6 +186,8 @@ def junit_text(rows: Sequence[dict[str, Any]], completion: Completion | None = N
         ET.SubElement(props, "property", name="settings", value=json.dumps(group[0]["settings"]))
         for row in group:
             case = ET.SubElement(suite, "testcase", classname=f"rigidbench.{scenario}.{row['case']}", name=row["check"])
+            if row.get("theory_ref"):  # the check's entry on the theory page (docs/theory.md), as in the JSON row
+                ET.SubElement(ET.SubElement(case, "properties"), "property", name="theory_ref", value=row["theory_ref"])
             if row["status"] == FAIL:
                 ET.SubElement(case, "failure", message=_verdict_line(row)).text = row["tolerance_reason"]
             elif row["status"] == DIVERGED:

@@ -127,7 +127,7 @@ def plan(
         For an unknown scenario, case or parameter, an invalid value, a set outside the theory's domain, or a
         run beyond the step or memory limits (naming it).
     """
-    from rigidbench.engines import EngineRefused
+    from rigidbench.engines.base import EngineRefused
 
     jobs = []
     for target in targets or list(registry.scenarios()):
@@ -222,6 +222,7 @@ def _no_result(job: Job, settings: Settings | None) -> dict[str, Any]:
         "tolerance_kind": None,
         "tolerance_reason": None,
         "theory": None,
+        "theory_ref": None,
         "status": ERROR,
         "passed": None,
         "diverged_at": None,
@@ -271,15 +272,15 @@ class Gathered(Threads):
     once."""
 
     def map(self, fn: Callable, calls: Sequence[tuple]) -> Iterator[tuple[int, Any]]:
-        from rigidbench import engines
+        from rigidbench.engines.batching import Gather, gathering
 
-        gather = engines.Gather(len(calls), self.workers)
+        gather = Gather(len(calls), self.workers)
 
         def member(*args):
             with gather.member_of():
                 return fn(*args)
 
-        with engines.gathering(gather):
+        with gathering(gather):
             try:
                 yield from super().map(member, calls)
             finally:

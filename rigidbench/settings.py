@@ -325,7 +325,7 @@ class Settings:
         ValueError
             For an unknown or uninstalled engine, or a device or precision it does not have.
         """
-        from rigidbench.engines import engine_for
+        from rigidbench.engines.registry import engine_for
 
         return engine_for(self.engine, device=self.device, precision=self.precision)
 

@@ -63,7 +63,8 @@ def simulate(
     ValueError
         See `steps_for`; or if `control` has the wrong shape.
     """
-    from rigidbench import engines, forces
+    from rigidbench import forces
+    from rigidbench.engines.base import current
 
     nstep = steps_for(duration, model.opt.timestep)
     forces.attach(model)
@@ -74,7 +75,7 @@ def simulate(
         if control.shape != (nstep, model.nu):
             raise ValueError(f"control has shape {control.shape}, expected ({nstep}, {model.nu})")
         kwargs["control"] = control[None]
-    engine = engines.current()
+    engine = current()
     if engine is not None:  # MuJoCo Warp or MJX (`rigidbench.engines`): float64 states back, same layout
         states = np.concatenate([state0[None], engine.rollout(model, state0[None], nstep, kwargs.get("control"))[0]])
         return split_states(model, states)
@@ -172,7 +173,8 @@ def final_states(
         raise ValueError(f"states0 has {states0.shape[1]} columns, expected {mujoco.mj_stateSize(base, STATE)}")
     if models is not None and len(models) != len(states0):
         raise ValueError(f"{len(models)} models for {len(states0)} states")
-    from rigidbench import engines, forces
+    from rigidbench import forces
+    from rigidbench.engines.base import current
 
     nthread = (os.cpu_count() or 1) if nthread is None else int(nthread)
     for m in models if models is not None else [base]:
@@ -180,7 +182,7 @@ def final_states(
             nthread = forces.threads_for(m, nthread)
     datas = [mujoco.MjData(base) for _ in range(max(nthread, 1))]
     out = np.empty_like(states0)
-    engine = engines.current()
+    engine = current()
     if engine is not None and models is not None:
         for i, (m, s0) in enumerate(zip(models, states0, strict=True)):  # one model each (e.g. a stiffness each)
             out[i] = engine.rollout(m, s0[None], nstep)[0, -1]

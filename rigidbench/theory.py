@@ -13,7 +13,7 @@ import re
 
 # Where the page lives, relative to the repository root (and to the docs of an installed copy's source).
 THEORY_PAGE = "docs/theory.md"
-# The public copy of the repository's docs that links in a report or a printed catalogue point to.
+# How an ID is written: a capital family letter and a number from 1 (``T4``, ``A2``); read from the leading clause.
 _ID = re.compile(r"\b([A-Z][1-9][0-9]?)\b")
 # The leading clause of a theory text: everything before its first colon, bracket or semicolon.
 _LEADING = re.compile(r"^[^:(\[;]*")

@@ -1,4 +1,4 @@
-"""The bent axle's closed forms (THEORY.md R8) alone, against independent numerics: quadrature of a tilted disc's
+"""The bent axle's closed forms (docs/theory.md R8) alone, against independent numerics: quadrature of a tilted disc's
 inertia, Newton's second law summed over a cloud of point masses, and the numerical time derivative of L."""
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""MuJoCo against THEORY.md R8: where the axle's reaction lives in MuJoCo, the rate held with no drive, every case
+"""MuJoCo against docs/theory.md R8: where the axle's reaction lives in MuJoCo, the rate held with no drive, every case
 under reference and mujoco-default, the domains, and what MuJoCo's compiler does to a nearly aligned inertial frame."""
 
 import mujoco
@@ -203,10 +203,10 @@ def test_a_float32_engine_is_held_to_the_secular_floor_of_the_rotors_angle(monke
     and rate checks are held to that floor (prediction["_roundoff_secular"]), and still pass."""
     from test_engines import Float32Engine
 
-    from rigidbench import engines
+    from rigidbench.engines import registry as engine_registry
     from rigidbench.settings import Settings
 
-    monkeypatch.setattr(engines, "engine_for", lambda name, **kw: Float32Engine())
+    monkeypatch.setattr(engine_registry, "engine_for", lambda name, **kw: Float32Engine())
     run = SCENARIO.run("off-axle", settings=Settings(engine="mjx"))
     direction = next(o for o in run.outcomes if o.check.name == "torque-direction")
     assert 1e-5 < direction.error < direction.check.tolerance  # float32 moved it, within its stated floor

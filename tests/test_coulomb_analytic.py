@@ -1,4 +1,5 @@
-"""The closed forms of `rigidbench.analytic.coulomb` alone (THEORY.md C2-C4, C6, C7, C9), each against an independent
+"""The closed forms of `rigidbench.analytic.coulomb` alone (docs/theory.md C2-C4, C6, C7, C9), each against an
+independent
 computation: the equations of motion integrated by scipy (DOP853), the scattering integral (C8) and the cross-section
 integrals by quadrature."""
 

@@ -1,4 +1,4 @@
-"""MuJoCo against the Coulomb closed forms (`rigidbench.envs.rutherford`, THEORY.md C1-C4, C6, C7, C9): every case
+"""MuJoCo against the Coulomb closed forms (`rigidbench.envs.rutherford`, docs/theory.md C1-C4, C6, C7, C9): every case
 under the reference settings, RK4's order on the forces route, the finite-distance correction, the beam as one
 model, and the inputs refused before simulating."""
 

@@ -18,7 +18,9 @@ import pytest
 
 from rigidbench import engines, registry, results, runner
 from rigidbench.cli import main
-from rigidbench.engines import CEngine, EngineRefused, clock, roundoff_floor
+from rigidbench.engines import CEngine, EngineRefused, batching, clock, roundoff_floor
+from rigidbench.engines import mjx as engine_mjx
+from rigidbench.engines import registry as engine_registry
 from rigidbench.settings import Settings
 
 
@@ -61,8 +63,8 @@ def fake_engine(monkeypatch):
     """The fakes above stand in for the engines the CLI knows (``--engine warp`` is `NoPgsEngine`, ``mjx``
     `Float32Engine`), so these tests run where neither is installed."""
     fakes = {"mjx": Float32Engine(), "warp": NoPgsEngine()}
-    real = engines.engine_for
-    monkeypatch.setattr(engines, "engine_for", lambda name, **kw: fakes.get(name) or real(name, **kw))
+    real = engine_registry.engine_for
+    monkeypatch.setattr(engine_registry, "engine_for", lambda name, **kw: fakes.get(name) or real(name, **kw))
     return fakes
 
 
@@ -391,8 +393,8 @@ def test_gathered_cases_run_as_one_batch_and_equal_each_run_alone(monkeypatch, n
     prepared = [job.scenario.prepare(job.case, job.overrides, settings) for job in jobs]
     assert prepared[0].model.opt.timestep != prepared[1].model.opt.timestep
     batches = []
-    run_part = engines._run_part
-    monkeypatch.setattr(engines, "_run_part", lambda part: (batches.append(len(part)), run_part(part))[1])
+    run_part = batching._run_part
+    monkeypatch.setattr(batching, "_run_part", lambda part: (batches.append(len(part)), run_part(part))[1])
     gathered = runner.run_jobs(jobs, settings, executor=runner.Gathered(2))
     assert batches == [2]
     alone = runner.run_jobs(jobs, settings, executor=runner.Threads(1))
@@ -429,8 +431,8 @@ def test_a_gathering_goes_on_without_members_that_leave_or_fail(monkeypatch, nam
             return first, engine.rollout(model, first[:, -1], 10)
 
     batches = []
-    run_part = engines._run_part
-    monkeypatch.setattr(engines, "_run_part", lambda part: (batches.append(len(part)), run_part(part))[1])
+    run_part = batching._run_part
+    monkeypatch.setattr(batching, "_run_part", lambda part: (batches.append(len(part)), run_part(part))[1])
     out = {}
     for index, result in runner.Gathered(6).map(
         lambda kind: _caught(case, kind), [("fails",), ("none",), ("two",), ("two",), ("bad",), ("long",)]
@@ -625,7 +627,8 @@ def test_an_env_stored_in_float32_predicts_from_the_rounded_body_and_keeps_its_m
 
 def test_mjx_steps_colliding_worlds_in_slices_that_equal_one_batch(monkeypatch):
     """On the CPU, MJX steps a colliding model's worlds in slices of `MJX_CONTACT_WORLDS` (an XLA hang above a few
-    hundred worlds, engines.py), the last slice padded: each world's states are the whole batch's, bit for bit."""
+    hundred worlds, rigidbench/engines/mjx.py), the last slice padded: each world's states are the whole batch's,
+    bit for bit."""
     pytest.importorskip("mujoco.mjx")
     model = registry.get("hard-spheres").prepare("equal-mass", {}, Settings()).model
     assert engines._collides(model)
@@ -636,9 +639,9 @@ def test_mjx_steps_colliding_worlds_in_slices_that_equal_one_batch(monkeypatch):
     _, q, v = engines._layout(model)
     states0[:, v] += np.linspace(0.0, 0.3, 7)[:, None]  # seven different worlds
     engine = engines.engine_for("mjx")
-    monkeypatch.setattr(engines, "MJX_CONTACT_WORLDS", 1000)
+    monkeypatch.setattr(engine_mjx, "MJX_CONTACT_WORLDS", 1000)
     whole = engine.rollout(model, states0, 12)
-    monkeypatch.setattr(engines, "MJX_CONTACT_WORLDS", 3)
+    monkeypatch.setattr(engine_mjx, "MJX_CONTACT_WORLDS", 3)
     sliced = engine.rollout(model, states0, 12)
     assert sliced.shape == whole.shape == (7, 12, states0.shape[1])
     np.testing.assert_array_equal(sliced, whole)

@@ -33,7 +33,7 @@ def _model(dt: float, k: float = K, custom: str | None = None) -> mujoco.MjModel
 
 
 def _circular(model: mujoco.MjModel) -> tuple[mujoco.MjData, float]:
-    """A circular relative orbit of radius 1 about the fixed CM (THEORY.md K1, K2); returns its angular rate."""
+    """A circular relative orbit of radius 1 about the fixed CM (docs/theory.md K1, K2); returns its angular rate."""
     data = mujoco.MjData(model)
     mu = 1 / (1 / M1 + 1 / M2)
     omega = np.sqrt(-K / (mu * 1.0**3))  # mu r omega^2 = |k| / r^2

@@ -1,4 +1,4 @@
-"""The gyrocompass closed forms alone (THEORY.md G1), before any simulator: the exact hunting equation against an
+"""The gyrocompass closed forms alone (docs/theory.md G1), before any simulator: the exact hunting equation against an
 independent numerical Lagrangian of the two rigid bodies, the quadrature period against scipy's solve_ivp, the
 limits (small amplitude, B = 0), the first integral, and the platform's momentum swing."""
 
@@ -70,7 +70,7 @@ def _lagrange_acceleration(q, qd, t, h=1e-4):
 
 @pytest.mark.parametrize("alpha", [0.3, 1.2, 2.6, -2.0])
 def test_hunting_equation_equals_an_independent_numerical_lagrangian(alpha):
-    """THEORY.md G1's exact equation and H, against Euler-Lagrange of the gimbal and rotor built from rotation
+    """docs/theory.md G1's exact equation and H, against Euler-Lagrange of the gimbal and rotor built from rotation
     matrices (no hand algebra): both terms A and B, at B / A ~ 0.1."""
     rng = np.random.default_rng(int(1000 * abs(alpha)))
     alpha_dot, chi_dot, t = rng.normal(0, 2.0), 2.0, rng.uniform(0, 5)
@@ -105,13 +105,14 @@ def _half_period(compass: gc.Gyrocompass, amplitude: float) -> float:
 
 @pytest.mark.parametrize("amplitude", [0.02, 1.0, 2.5, 3.0])
 def test_quadrature_period_equals_solve_ivp_of_the_hunting_equation(amplitude):
-    """THEORY.md check E1c: the period by quadrature at 0.02 .. 3 rad."""
+    """docs/theory.md check E1c: the period by quadrature at 0.02 .. 3 rad."""
     compass = _compass()
     assert compass.period(amplitude) == pytest.approx(2 * _half_period(compass, amplitude), rel=1e-10)
 
 
 def test_with_B_zero_the_period_is_the_pendulums_elliptic_one():
-    """B = 0 (no transverse rotor moment): V = -A cos alpha, a pendulum, T = 4 K(sin(a/2)) / sqrt(A) (THEORY.md O1)."""
+    """B = 0 (no transverse rotor moment): V = -A cos alpha, a pendulum, T = 4 K(sin(a/2)) / sqrt(A) (docs/theory.md
+    O1)."""
     compass = gc.Gyrocompass(0.0, I_G, 0.9, 0.4)
     for amplitude in (0.1, 1.5, 2.9):
         expected = 4 * ellipk(np.sin(amplitude / 2) ** 2) / np.sqrt(compass.A)
@@ -132,7 +133,7 @@ def test_small_amplitude_period_tends_to_2_pi_over_omega_g_with_the_stated_shift
 
 
 def test_fast_rotor_approaches_the_simple_frequency_within_I_t_Omega_over_2H():
-    """THEORY.md G1: the simple form sqrt(H Omega_perp / (I_t + I_g)) differs by ~ I_t Omega_perp / (2 H)."""
+    """docs/theory.md G1: the simple form sqrt(H Omega_perp / (I_t + I_g)) differs by ~ I_t Omega_perp / (2 H)."""
     for spin in (100.0, 1e3, 1e4):
         compass = _compass(spin)
         expected = I_T * compass.omega_perp / (2 * compass.spin_momentum)

@@ -1,4 +1,4 @@
-"""MuJoCo against the gyrocompass closed forms (THEORY.md G1): every case under the reference settings, the
+"""MuJoCo against the gyrocompass closed forms (docs/theory.md G1): every case under the reference settings, the
 exact equation resolved beyond its fast-rotor form, the error budget each tolerance names (RK4's dt^4, the
 platform's finite inertia), the compiled geometry read back, and the mujoco-default findings' mechanism."""
 

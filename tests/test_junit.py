@@ -3,7 +3,7 @@
 import json
 import xml.etree.ElementTree as ET
 
-from rigidbench import cli
+from rigidbench import cli, theory
 
 
 def test_junit_has_one_testcase_per_check_grouped_by_scenario(tmp_path):
@@ -26,6 +26,10 @@ def test_junit_has_one_testcase_per_check_grouped_by_scenario(tmp_path):
         assert failed == (row["status"] == "fail") and errored == (row["status"] == "diverged")
         if failed:
             assert "expected" in case.find("failure").get("message")
+        # the check's theory ID (the JSON row's theory_ref) as a per-case property
+        props = {p.get("name"): p.get("value") for p in case.iterfind("properties/property")}
+        assert row["theory_ref"] == theory.theory_ref(row["theory"]) != ""
+        assert props == {"theory_ref": row["theory_ref"]}
     for suite in suites:
         group = [r for r in rows if r["scenario"] == suite.get("name")]
         assert int(suite.get("tests")) == len(group)

@@ -1,4 +1,4 @@
-"""The two-body closed forms alone (THEORY.md K1-K5), against independent numerics: scipy's DOP853 on Newton's
+"""The two-body closed forms alone (docs/theory.md K1-K5), against independent numerics: scipy's DOP853 on Newton's
 equations (the relative coordinate, or both bodies in the LAB frame), and quadrature."""
 
 from __future__ import annotations
@@ -157,7 +157,7 @@ def test_virial_means_over_a_period(law, k, s):
 
 @pytest.mark.parametrize("exponent", [2.0, 1.0, 0.0, -1.0, 2.5])
 def test_apsidal_angle_of_a_near_circular_orbit(exponent):
-    """K5: pericentre to apocentre sweeps pi / sqrt(3 - n) for F = -k / r^n near a circular orbit (THEORY.md check
+    """K5: pericentre to apocentre sweeps pi / sqrt(3 - n) for F = -k / r^n near a circular orbit (docs/theory.md check
     J4). Integrated at a 1e-3 perturbation of the circular speed; the closed form is the e -> 0 limit, off by
     O(e^2) ~ 1e-6 for n != 2, -1 (Kepler and Hooke: exact)."""
     k, r0 = 1.0, 1.0

@@ -1,4 +1,4 @@
-"""MuJoCo against the two-body closed forms (THEORY.md K1-K5): the Hooke force as a zero-length tendon, the Kepler
+"""MuJoCo against the two-body closed forms (docs/theory.md K1-K5): the Hooke force as a zero-length tendon, the Kepler
 force through rigidbench.forces, under the reference profile and MuJoCo's defaults."""
 
 from __future__ import annotations

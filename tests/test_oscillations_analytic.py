@@ -1,4 +1,4 @@
-"""The pendulum and coupled-oscillation closed forms alone (THEORY.md O1-O7): limits, identities, and an
+"""The pendulum and coupled-oscillation closed forms alone (docs/theory.md O1-O7): limits, identities, and an
 independent reference (scipy's solve_ivp of the full nonlinear equations), before any simulator is involved."""
 
 import numpy as np
@@ -36,7 +36,7 @@ def test_small_amplitude_period_tends_to_2_pi_sqrt_l_over_g():
 
 
 def test_exact_period_follows_its_series_with_the_stated_error():
-    """THEORY.md O1: the two-term series errs by 2.4e-4 at 1 rad and 7 % at 2.5 rad; by ~a^6 at small a."""
+    """docs/theory.md O1: the two-term series errs by 2.4e-4 at 1 rad and 7 % at 2.5 rad; by ~a^6 at small a."""
     for amplitude, err in ((1.0, 2.4e-4), (2.5, 0.07)):
         exact = osc.pendulum_period(1.0, G, amplitude)
         assert abs(osc.pendulum_period_series(1.0, G, amplitude) / exact - 1) == pytest.approx(err, rel=0.05)
@@ -46,7 +46,7 @@ def test_exact_period_follows_its_series_with_the_stated_error():
 
 @pytest.mark.parametrize("amplitude", [0.1, 1.0, 2.5, 3.0, 3.1])
 def test_exact_period_equals_solve_ivp_of_the_nonlinear_pendulum(amplitude):
-    """THEORY.md check H1: an independent integration of th'' = -(g/l) sin th gives the same period."""
+    """docs/theory.md check H1: an independent integration of th'' = -(g/l) sin th gives the same period."""
     period = osc.pendulum_period(0.8, G, amplitude)
     assert 2 * _nonlinear_half_period(0.8, G, amplitude) == pytest.approx(period, rel=1e-9)
 
@@ -90,7 +90,7 @@ def test_two_pendulum_chain_is_the_coupled_pair_and_its_modes_are_plus_minus_one
 
 
 def test_beat_formula_is_the_linear_normal_mode_solution():
-    """THEORY.md O4 is exact for the linear system: it equals the O7 modal solution from (A, 0) at rest."""
+    """docs/theory.md O4 is exact for the linear system: it equals the O7 modal solution from (A, 0) at rest."""
     i_o, mgl, k, d, a = 1.0, G, 1.0, 0.5, 1e-3
     modes = osc.normal_modes(*osc.spring_chain_matrices(2, i_o, mgl, k, d))
     beats = osc.Beats(a, *osc.coupled_frequencies(i_o, mgl, k, d))
@@ -107,7 +107,7 @@ def test_all_the_energy_is_in_pendulum_2_at_the_transfer_time():
 
 
 def test_weak_coupling_beat_rate_tends_to_kappa_over_omega_s():
-    """THEORY.md O4: omega_a - omega_s ~ kappa / omega_s for kappa = k d^2 / (m l^2) << g / l."""
+    """docs/theory.md O4: omega_a - omega_s ~ kappa / omega_s for kappa = k d^2 / (m l^2) << g / l."""
     for k in (1e-2, 1e-3):
         ws, wa = osc.coupled_frequencies(1.0, G, k, 0.5)
         kappa = k * 0.25
@@ -119,7 +119,7 @@ def test_weak_coupling_beat_rate_tends_to_kappa_over_omega_s():
 
 @pytest.mark.parametrize("n", [2, 3, 5, 7, 12])
 def test_chain_closed_form_equals_the_generalised_eigenproblem(n):
-    """THEORY.md O5 equals O7's det(V - omega^2 T) = 0, frequencies and shapes (check H5)."""
+    """docs/theory.md O5 equals O7's det(V - omega^2 T) = 0, frequencies and shapes (check H5)."""
     i_o, mgl, k, d = 0.9, 7.5, 3.7, 0.42
     modes = osc.normal_modes(*osc.spring_chain_matrices(n, i_o, mgl, k, d))
     np.testing.assert_allclose(modes.frequencies, osc.chain_frequencies(n, i_o, mgl, k, d), rtol=1e-13)
@@ -172,7 +172,7 @@ def test_double_pendulum_equal_masses_and_lengths_give_2_minus_plus_sqrt_2():
 
 @pytest.mark.parametrize("m1, m2, l1, l2", [(1.0, 0.3, 1.0, 0.6), (0.2, 5.0, 0.3, 2.0), (1.0, 1e-3, 1.0, 1.0)])
 def test_double_pendulum_quartic_equals_the_eigenproblem(m1, m2, l1, l2):
-    """THEORY.md O6's quartic is O7 for point bobs (check H6a-d)."""
+    """docs/theory.md O6's quartic is O7 for point bobs (check H6a-d)."""
     modes = osc.normal_modes(*osc.double_pendulum_matrices(m1, m2, l1, l2, G))
     np.testing.assert_allclose(osc.double_pendulum_frequencies(m1, m2, l1, l2, G), modes.frequencies, rtol=1e-13)
 

@@ -1,4 +1,4 @@
-"""The pendulum family in MuJoCo against theory (THEORY.md O1-O7): every case under the reference profile, the
+"""The pendulum family in MuJoCo against theory (docs/theory.md O1-O7): every case under the reference profile, the
 issue's parameter sets through the CLI, what MuJoCo's default integrator does, bad input, and the measurement
 methods themselves (each tolerance rests on one)."""
 

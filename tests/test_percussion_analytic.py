@@ -1,4 +1,4 @@
-"""The percussion closed forms alone (THEORY.md P1-P6, B1-B2): limits, identities and independent references."""
+"""The percussion closed forms alone (docs/theory.md P1-P6, B1-B2): limits, identities and independent references."""
 
 import ast
 import inspect
@@ -15,7 +15,7 @@ I_CM = pc.uniform_rod_inertia(M, L)
 
 def test_uniform_rod_inertia_uses_the_full_length():
     half = L / 2
-    assert I_CM == pytest.approx(M * half**2 / 3, rel=1e-15)  # THEORY.md writes M l^2 / 3 with l = L/2
+    assert I_CM == pytest.approx(M * half**2 / 3, rel=1e-15)  # docs/theory.md writes M l^2 / 3 with l = L/2
 
 
 @pytest.mark.parametrize("offset", [0.05, 0.25, 0.5])
@@ -35,7 +35,8 @@ def test_centre_of_percussion_is_at_rest_just_after_the_blow(offset):
 
 
 def test_strike_at_a_third_of_the_half_length_leaves_the_far_end_at_rest():
-    """THEORY.md P6 rule 2: a marble at one end is not pushed if the stick is struck at h = l/3 (66.7 cm from it)."""
+    """docs/theory.md P6 rule 2: a marble at one end is not pushed if the stick is struck at h = l/3 (66.7 cm from
+    it)."""
     half = L / 2
     s = pc.struck_stick(M, I_CM, 1.0, half / 3)
     assert s.percussion_distance == pytest.approx(half, rel=1e-15)
@@ -106,7 +107,7 @@ def test_elastic_ball_on_stick_conserves_momentum_energy_and_angular_momentum(ba
 
 @pytest.mark.parametrize("ball_mass", [0.05, 0.25, 1.0])
 def test_ball_on_stick_matches_a_stiff_spring_collision(ball_mass):
-    """Independent reference (THEORY.md check F4): the planar ball-stick collision through a stiff linear spring,
+    """Independent reference (docs/theory.md check F4): the planar ball-stick collision through a stiff linear spring,
     with the stick free to turn during the contact, integrated by DOP853."""
     h, u, k = 0.3, 2.0, 1e10  # contact time ~ pi sqrt(m_red / k) ~ 1e-6 s: the stick turns by ~1e-5 rad
 

@@ -65,6 +65,13 @@ def test_results_table_colours_verdicts_and_filters_by_scenario(page):
     assert "addEventListener('change'" in page
 
 
+def test_results_table_links_each_theory_id_to_its_entry_on_the_theory_page(page, documents):
+    rows = json.loads(open(documents[0]).read())["results"]
+    for ref in {r["theory_ref"] for r in rows}:
+        assert f'<td><a href="docs/theory.md#{ref.lower()}">{ref}</a></td>' in page
+    assert "<th>theory</th>" in page and "<code>docs/theory.md</code>" in page  # and says where the page is
+
+
 def test_page_states_versions_settings_figures_and_orders(page):
     import mujoco
 

@@ -1,4 +1,4 @@
-"""The rotating-frame closed forms alone (`rigidbench.analytic.rotating`, THEORY.md N1-N3), against independent
+"""The rotating-frame closed forms alone (`rigidbench.analytic.rotating`, docs/theory.md N1-N3), against independent
 numerics: scipy's DOP853 on the rotating-frame equations, written out here again from Wilcox eq. 10.35, and the
 swing plane measured here from that integration, not by the scenario's code."""
 
@@ -64,7 +64,7 @@ def test_eastward_deflection_where_the_body_has_fallen_h_is_n3_within_its_neglec
 
 
 def test_at_earths_rate_n3_is_the_exact_drop_to_1e8():
-    """Earth's rate, h = 100 m, lambda = 45 deg (THEORY.md K2's example): N3 gives 1.55 cm, and the exact landing
+    """Earth's rate, h = 100 m, lambda = 45 deg (docs/theory.md K2's example): N3 gives 1.55 cm, and the exact landing
     differs by x0^2 (3 cos^2(lambda)/8 - 1/10) = 9.5e-9 of it (x0 = Omega t0 = 3.3e-4)."""
     rate, h, lat = 7.292e-5, 100.0, np.pi / 4
     n3 = rot.eastward_deflection(rate, G, h, lat)
@@ -75,7 +75,7 @@ def test_at_earths_rate_n3_is_the_exact_drop_to_1e8():
 
 
 def test_foucault_swing_solves_n2_from_rest():
-    """q = ... of THEORY.md N2 satisfies q'' + 2 i Omega_z q' + omega0^2 q = 0 and starts at rest at A e^{i az}."""
+    """q = ... of docs/theory.md N2 satisfies q'' + 2 i Omega_z q' + omega0^2 q = 0 and starts at rest at A e^{i az}."""
     w0, wz, a, az = 3.0, 0.1, 0.02, 0.7
     t = np.linspace(0, 10, 20001)
     q = rot.foucault_swing(t, w0, wz, a, az)
@@ -124,7 +124,7 @@ def test_rotating_pendulum_keeps_its_rod_and_its_jacobi_integral():
 
 def _half_turn_rate(lat: float, ratio: float, amplitude: float, azimuth: float, length: float = 1.0) -> tuple:
     """The mean rate of the swing plane over its first half turn, measured from an independent integration:
-    N1 in Cartesian coordinates with the rod as a Lagrange multiplier (THEORY.md check K1), the azimuth of each
+    N1 in Cartesian coordinates with the rod as a Lagrange multiplier (docs/theory.md check K1), the azimuth of each
     maximum excursion across the plumb line, and the time it is back on its first line (spline through them)."""
     w0 = np.sqrt(G / length)
     w, g = rot.rate_vector(ratio * w0, lat), np.array([0.0, 0.0, -G])

@@ -1,4 +1,4 @@
-"""The scattering closed forms alone (THEORY.md C1-C6, C8): identities, limits, independent references."""
+"""The scattering closed forms alone (docs/theory.md C1-C6, C8): identities, limits, independent references."""
 
 from __future__ import annotations
 

@@ -75,7 +75,7 @@ def test_every_task_is_a_task_env_with_its_own_id(task_env_id):
     assert isinstance(env, TaskEnv) and type(env).env_id == task_env_id != env.scenario.env_id
 
 
-# ---- TopPrecession-v0 (THEORY.md T4) ------------------------------------------------------------------------
+# ---- TopPrecession-v0 (docs/theory.md T4) ------------------------------------------------------------------------
 
 
 def test_top_precession_baseline_ends_in_T4_steady_precession_needing_no_torque():
@@ -106,7 +106,7 @@ def test_top_precession_random_and_zero_policies_have_positive_regret():
     assert min(random) > 100 and min(zero) > 100
 
 
-# ---- PendulumEnergyTransfer-v0 (THEORY.md O3, O4) ----------------------------------------------------------
+# ---- PendulumEnergyTransfer-v0 (docs/theory.md O3, O4) ----------------------------------------------------------
 
 
 def test_pendulum_energy_transfer_baseline_reaches_the_linear_optimum():
@@ -140,7 +140,7 @@ def test_pendulum_energy_transfer_baseline_beats_other_drives():
     assert min(regrets.values()) > 2e-3
 
 
-# ---- CueShot-v0 (THEORY.md B1, B2) ---------------------------------------------------------------------------
+# ---- CueShot-v0 (docs/theory.md B1, B2) ---------------------------------------------------------------------------
 
 # Bound on the theory action's regret: the cue-strike scenario's own tolerance on the final speed (1e-5 relative);
 # the no-skid blow leaves a slip of ~3e-7 m/s, far below the 1e-3 v* that counts as skidding, so its skid term is
@@ -176,7 +176,7 @@ def test_cue_shot_strike_at_seven_tenths_of_the_diameter_does_not_skid():
     assert info["final_speed"] == pytest.approx(5 / 7, rel=1e-5) and reward < -0.2
 
 
-# ---- PercussionStrike-v0 (THEORY.md P2, P5, P6) -------------------------------------------------------------
+# ---- PercussionStrike-v0 (docs/theory.md P2, P5, P6) -------------------------------------------------------------
 
 # Bound on the theory action's regret: the marble-shot scenario's tolerance on C's speed (5e-5 relative: C is hit
 # when the stick has turned ~1e-3 rad) and the same geometry for A's end (~1e-5 of u*). Measured: <= 4.6e-6.
@@ -214,7 +214,7 @@ def test_percussion_strike_at_the_textbook_centre_of_percussion_pushes_a_through
     assert info["marble_a_speed"] > 0.05 * info["marble_c_speed"]  # A is pushed after all
 
 
-# ---- ScatterToAngle-v0 (THEORY.md C2, C3, C5) ----------------------------------------------------------------
+# ---- ScatterToAngle-v0 (docs/theory.md C2, C3, C5) ----------------------------------------------------------------
 
 
 def _soft_bound(env) -> float:

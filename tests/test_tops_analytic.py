@@ -1,4 +1,4 @@
-"""The tops' closed forms alone (THEORY.md sections 2-4), against limits, identities and an independent ODE.
+"""The tops' closed forms alone (docs/theory.md sections 2-4), against limits, identities and an independent ODE.
 
 The independent reference integrates Euler's equations (torque-free) or the Euler-angle Lagrange equations of
 the heavy top with scipy's DOP853 at rtol = atol = 1e-12; its own error (~1e-10 over these spans) sets the
@@ -73,7 +73,7 @@ def test_asymmetric_top_period_is_time_for_omega2_to_repeat():
 
 @pytest.mark.parametrize("eps", [np.radians(10), np.radians(1), np.radians(0.1)])
 def test_harter_kim_flip_time_equals_half_period_of_elliptic_solution(eps):
-    """THEORY.md A3: T_rev = 2 K / s from W (0, cos eps, sin eps) (Harter & Kim eqs 14-17)."""
+    """docs/theory.md A3: T_rev = 2 K / s from W (0, cos eps, sin eps) (Harter & Kim eqs 14-17)."""
     inertia = (1.0, 2.0, 2.5)
     spin = 3.0
     top = tops.asymmetric_top(inertia, [0.0, spin * np.cos(eps), spin * np.sin(eps)])
@@ -82,7 +82,7 @@ def test_harter_kim_flip_time_equals_half_period_of_elliptic_solution(eps):
 
 
 def test_flip_time_tends_to_logarithmic_law_as_tilt_vanishes():
-    """THEORY.md A3/C6: T_rev ~ (2/lambda) ln(4/k'), with an error that falls like eps^2."""
+    """docs/theory.md A3/C6: T_rev ~ (2/lambda) ln(4/k'), with an error that falls like eps^2."""
     inertia = (1.0, 2.0, 2.5)
     i1, i2, i3 = inertia
     lam = tops.intermediate_axis_growth_rate(inertia, 1.0)

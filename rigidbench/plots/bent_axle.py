@@ -1,6 +1,6 @@
-"""Figures of the bent axle (THEORY.md R8): the bearing torque turning with the rotor in space, MuJoCo's sensors over
-the closed form of `rigidbench.analytic.bent_axle`, and the reaction of every case in the rotor's axes against its
-round-off floor."""
+"""Figures of the bent axle (docs/theory.md R8): the bearing torque turning with the rotor in space, MuJoCo's
+sensors over the closed form of `rigidbench.analytic.bent_axle`, and the reaction of every case in the rotor's axes
+against its round-off floor."""
 
 from __future__ import annotations
 
@@ -41,7 +41,8 @@ def bent_axle(ctx: PlotContext) -> list[Figure]:
                 "Bent axle: the bearing torque turns with the rotor",
                 "The torque the axle exerts on the rotor about O, in space axes, over the run (5 turns): MuJoCo's "
                 "torque sensor at the bearing (dots) over N = omega x L = omega^2 (-I_yz, I_xz, 0) turned by omega t "
-                "(THEORY.md R8, black). N stays perpendicular to the axle (N_z = 0) and turns at the axle rate. Lower "
+                "(docs/theory.md R8, black). N stays perpendicular to the axle (N_z = 0) and turns at the axle rate. "
+                "Lower "
                 f"panels: the relative difference ({settings_text(turning[0][1])}): round-off, growing only with "
                 "the rotor's angle (theta = omega t is integrated exactly; qpos carries one rounding per step).",
                 fig,

@@ -1,6 +1,6 @@
 """Figures of Rutherford scattering (`rigidbench.envs.rutherford`): the deflection function and LAB angles against
 the impact parameter (every pair of the Monte Carlo beam is a point), the beam's histograms over Rutherford's
-1/sin^4(theta/2) and the LAB cross sections, and the LAB and CM views of one orbit side by side (THEORY.md C9: the
+1/sin^4(theta/2) and the LAB cross sections, and the LAB and CM views of one orbit side by side (docs/theory.md C9: the
 LAB path has no asymptote). Simulation (coloured markers) over theory (black, `rigidbench.analytic.coulomb`).
 
 Extra simulations: none; the figures reuse the cases' runs (the beam's final states give its deflection function).
@@ -78,7 +78,7 @@ def _deflection(ctx: PlotContext, beam, singles) -> list[Figure]:
             "Rutherford: scattering angle against the impact parameter",
             "Left: the CM deflection of every pair of the Monte Carlo beam (one MuJoCo model of "
             f"{len(got['b'])} independent pairs) and of the single-collision cases, against tan(theta/2) = D / b "
-            "(THEORY.md C7, black); bottom, the residual against the RK4 tolerance. Right: the LAB angles of the "
+            "(docs/theory.md C7, black); bottom, the residual against the RK4 tolerance. Right: the LAB angles of the "
             "projectile and of the recoiling target (C2). Agreement: the points on the curves and the residuals "
             "inside the dotted band (they are ~1e-8 rad, RK4 at 20 steps per passage).",
             fig,
@@ -139,7 +139,8 @@ def _histograms(ctx: PlotContext, beam) -> list[Figure]:
             "Rutherford: the Monte Carlo cross section over 1/sin^4(theta/2)",
             f"A uniform beam of {n} collisions over a disc of radius b_max = D cot(theta_min / 2) (the finite-b cut: "
             "Rutherford's total cross section is infinite). Left: dsigma/dOmega from the CM-angle histogram (bins of "
-            "equal expected count) against (k/4E)^2 / sin^4(theta/2) (THEORY.md C7), with Poisson error bars. Right: "
+            "equal expected count) against (k/4E)^2 / sin^4(theta/2) (docs/theory.md C7), with Poisson error bars. "
+            "Right: "
             "the LAB angles of the projectile and of the target against the C6 cross sections (black and red steps). "
             "Agreement: points within their error bars, the goodness-of-fit p-values in the titles above 1e-3.",
             fig,
@@ -218,9 +219,9 @@ def _orbits(ctx: PlotContext, run) -> Figure:
         "Rutherford: the orbit in the CM and LAB frames (no LAB asymptote)",
         "One collision (lab-orbit case, m1 = m2, b = D). Left: in the CM frame both bodies follow hyperbolas, "
         "mass-scaled copies with straight asymptotes (dotted). Middle: the LAB paths near the collision. Right: the "
-        "lateral offset of the projectile's LAB path from its asymptotic direction keeps growing as C ln t (THEORY.md "
-        "C9; black: the predicted slope), because the relative coordinate's Coulomb lag D ln t points along the CM "
-        "direction, not the LAB velocity; the CM-frame offset (green) settles. Agreement: the orange curve parallel "
-        "to the black line on the log axis, the green one flat.",
+        "lateral offset of the projectile's LAB path from its asymptotic direction keeps growing as C ln t "
+        "(docs/theory.md C9; black: the predicted slope), because the relative coordinate's Coulomb lag D ln t "
+        "points along the CM direction, not the LAB velocity; the CM-frame offset (green) settles. Agreement: the "
+        "orange curve parallel to the black line on the log axis, the green one flat.",
         fig,
     )

@@ -1,5 +1,5 @@
-"""Figures of the gyrocompass (THEORY.md G1): the hunting of the spin axis about North in each case, and the hunting
-period against amplitude. Simulation (coloured) over theory (black: the exact hunting equation of
+"""Figures of the gyrocompass (docs/theory.md G1): the hunting of the spin axis about North in each case, and the
+hunting period against amplitude. Simulation (coloured) over theory (black: the exact hunting equation of
 `rigidbench.analytic.gyrocompass`, its quadrature period), with the differences underneath.
 
 Extra simulations: three amplitudes of the large-hunting case beyond the cases (about 0.3 s each), so that the
@@ -94,8 +94,8 @@ def gyrocompass(ctx: PlotContext) -> list[Figure]:
         Figure(
             "Gyrocompass: hunting about North, and its period against amplitude",
             "Left: the azimuth of the spin axis (from North towards East), over its amplitude, against time in hunting "
-            "periods, for each case: MuJoCo (dots) over the exact hunting equation of THEORY.md G1 integrated from "
-            "the simulated initial state (black). The axis swings symmetrically about North (dotted): the "
+            "periods, for each case: MuJoCo (dots) over the exact hunting equation of docs/theory.md G1 integrated "
+            "from the simulated initial state (black). The axis swings symmetrically about North (dotted): the "
             "north-seeking equilibrium. Agreement: the dots on the black curves; the lower panel gives the "
             f"difference over the amplitude (worst {worst:.1e}). Right: the period against amplitude, in units of "
             "the small-amplitude period 2 pi / omega_g: black the quadrature, orange dashed the leading a^2 term. "

@@ -52,7 +52,8 @@ def _lab_cm(ctx: PlotContext, case: str, label: str) -> Figure | None:
         f"Two-body orbit, LAB and CM views ({case})",
         f"{label}. Left, the LAB frame: each body's path (coloured dots, MuJoCo) over the theory (black), the CM "
         "moving uniformly along R0 + V0 t. Right, the CM frame: the two orbits are mass-scaled copies of the "
-        f"relative orbit (THEORY.md K3, r1' = (m2/M) r, r2' = -(m1/M) r) and {shared}; agreement is the dots on the "
+        f"relative orbit (docs/theory.md K3, r1' = (m2/M) r, r2' = -(m1/M) r) and {shared}; agreement is the dots on "
+        "the "
         "black curves.",
         fig,
     )

@@ -71,7 +71,7 @@ def pendulum(ctx: PlotContext) -> list[Figure]:
         Figure(
             "Pendulum: period against amplitude",
             "Period of a simple pendulum released from rest at amplitude a, in units of the small-angle period "
-            "T0. Black: the exact period 4 sqrt(l/g) K(sin(a/2)) of THEORY.md O1, which diverges as a -> pi; "
+            "T0. Black: the exact period 4 sqrt(l/g) K(sin(a/2)) of docs/theory.md O1, which diverges as a -> pi; "
             "orange dashed: the two-term series, good to 2.4e-4 at 1 rad and 7 % at 2.5 rad. Points: MuJoCo's "
             "period measured from 40 zero crossings (circles: the cases; squares: more amplitudes). Agreement: "
             "the points on the black curve at every amplitude. Lower panel: relative errors, the simulation's "
@@ -107,7 +107,7 @@ def pendulum(ctx: PlotContext) -> list[Figure]:
             Figure(
                 "Pendulum: the large-amplitude motion",
                 "The angle over the first three periods (of the 20 simulated): "
-                "MuJoCo (thick red) on the exact elliptic solution of THEORY.md O1 (black), which flattens at the "
+                "MuJoCo (thick red) on the exact elliptic solution of docs/theory.md O1 (black), which flattens at the "
                 "turning points and lags the small-angle cosine (grey dotted) more and more as the amplitude "
                 "approaches pi. Lower panels: the difference, a few parts in 1e9 of the amplitude (the integrator's "
                 "phase error, oscillating at the turning points).",
@@ -175,12 +175,12 @@ def coupled_pendulums(ctx: PlotContext) -> list[Figure]:
             Figure(
                 f"Coupled pendulums, {case}: beats and energy transfer",
                 "Pendulum 1 released at A, pendulum 2 at rest: the motion is the sum of the in-phase and "
-                "anti-phase normal modes (THEORY.md O3), so each pendulum swings at the mean frequency w0 inside "
+                "anti-phase normal modes (docs/theory.md O3), so each pendulum swings at the mean frequency w0 inside "
                 "an envelope A |cos(wb t)| or A |sin(wb t)| (red dashed, O4) and the energy passes completely to "
                 "pendulum 2 at T_x = pi/(w_a - w_s) (dotted lines at its multiples), and back. Thick coloured "
                 "lines: MuJoCo; thin black: the O4 solution. Agreement: the swing fills the envelope and "
                 "pendulum 1 comes to rest at T_x. Lower panel: the difference, growing with time from the small "
-                "nonlinear frequency shift at this amplitude (THEORY.md O4 is the linear solution).",
+                "nonlinear frequency shift at this amplitude (docs/theory.md O4 is the linear solution).",
                 fig,
             )
         )
@@ -253,7 +253,7 @@ def pendulum_chain(ctx: PlotContext) -> list[Figure]:
             "Pendulum chain: mode frequencies",
             "A row of N identical pendulums with springs between neighbours, one end pendulum released: every "
             "mode is excited. Coloured dots: the frequency of each normal coordinate of MuJoCo's motion (the "
-            "modal filter of THEORY.md O7, zero crossings over 30 periods); open circles: the eigenvalues of O7; "
+            "modal filter of docs/theory.md O7, zero crossings over 30 periods); open circles: the eigenvalues of O7; "
             "dashed: O5's closed-form dispersion relation through them. Agreement: each dot inside its circle, "
             "on the curve. Lower panel: relative differences per mode from O7 (dots) and O5 (crosses, hidden behind "
             "the dots: O5 and O7 agree to roundoff), against the tolerance.",
@@ -327,7 +327,7 @@ def double_pendulum(ctx: PlotContext) -> list[Figure]:
     figures.append(
         Figure(
             "Double pendulum: trajectories in the (theta1, theta2) plane",
-            "The absolute rod angles of MuJoCo's motion (red) with the two normal-mode lines of THEORY.md O6/O7 "
+            "The absolute rod angles of MuJoCo's motion (red) with the two normal-mode lines of docs/theory.md O6/O7 "
             "(dashed; theta2/theta1 = +-sqrt 2 for equal masses and lengths). Released in a mode's shape, the "
             "motion stays on that line (slow-mode, fast-mode); released with rod 2 hanging (released, unequal), "
             "it is the sum of both modes, a Lissajous figure inside a parallelogram whose sides are parallel to the "
@@ -367,13 +367,13 @@ def double_pendulum(ctx: PlotContext) -> list[Figure]:
         figures.append(
             Figure(
                 "Double pendulum: the motion projected on the normal modes",
-                "MuJoCo's motion with both modes excited, projected on the mode vectors a_r of THEORY.md O7 "
+                "MuJoCo's motion with both modes excited, projected on the mode vectors a_r of docs/theory.md O7 "
                 "(q_r = a_r^T T theta, with T the kinetic-energy matrix): each projection is a single cosine at "
                 "its own mode frequency, as the normal-mode theorem says (upper rows: the first three slow periods, "
                 "MuJoCo thick coloured, black q_r(0) cos(w_r t)). Agreement: each projection is one clean "
                 "cosine on the black one, no beating from the other mode. Bottom: the difference over the whole "
                 "run, relative to the larger mode amplitude, a slow phase drift from the fast mode's nonlinear "
-                "frequency shift at this amplitude (THEORY.md O6 is linear).",
+                "frequency shift at this amplitude (docs/theory.md O6 is linear).",
                 fig,
             )
         )

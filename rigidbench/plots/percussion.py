@@ -121,7 +121,7 @@ def struck_stick(ctx: PlotContext) -> list[Figure]:
             "Struck stick: the centre of percussion traces a cycloid",
             "A free stick on frictionless ice struck along +x at h from its centre (three cases). Red dots: MuJoCo's "
             "path of the body point s = -p, the centre of percussion p = I/(M h) on the far side; black: the common "
-            "cycloid of THEORY.md P3, traced by a circle of radius p rolling along the CM's path. Agreement: the "
+            "cycloid of docs/theory.md P3, traced by a circle of radius p rolling along the CM's path. Agreement: the "
             "dots lie on the curve and the measured cusps (blue crosses, where the point is momentarily at rest) "
             "sit on the predicted ones (open triangles), 2 pi p apart. Grey: the stick at 7 instants (dotted "
             "extension to s = -p in the near-centre case, where the centre of percussion lies off the stick).",
@@ -238,7 +238,7 @@ def cue_strike(ctx: PlotContext) -> list[Figure]:
         figures.append(
             Figure(
                 "Cue ball: contact-point slip to rolling",
-                "The cue leaves the ball with slip u0 = v0 (1 - 5h/(2R)) (THEORY.md B1): positive for a centre "
+                "The cue leaves the ball with slip u0 = v0 (1 - 5h/(2R)) (docs/theory.md B1): positive for a centre "
                 "shot or a draw (backspin), negative for topspin above the no-skid height 2R/5, zero at it. Sliding "
                 "friction then reduces |u| along the straight line u0 - (7/2) mu g t of B2 (black dashed) to zero at "
                 "t_r = 2|u0|/(7 mu g) (triangles), after which the ball rolls. Thick coloured lines: MuJoCo. "
@@ -265,7 +265,7 @@ def cue_strike(ctx: PlotContext) -> list[Figure]:
     figures.append(
         Figure(
             "Cue ball: it hops (a MuJoCo finding)",
-            "Height of the ball's centre above its resting height, in radii, while it skids and rolls. THEORY.md "
+            "Height of the ball's centre above its resting height, in radii, while it skids and rolls. docs/theory.md "
             "B2 assumes it stays on the table (the black dashed zero). MuJoCo solves normal and friction rows as "
             "one soft constraint: while the ball slides, the friction demand pushes the normal force above M g and "
             f"kicks the ball off the cloth at each touchdown, so it hops along until it rolls (largest lift with "
@@ -334,7 +334,8 @@ def cushion_rebound(ctx: PlotContext) -> list[Figure]:
         Figure(
             "Cushion rebound: no skid at 7/10 of the diameter",
             "A ball rolling at v into a cushion whose nose is at height H above the table. Left: the slip of the "
-            "contact point the rebound leaves, against H: THEORY.md B1's straight line (black), zero at H = 0.7 of "
+            "contact point the rebound leaves, against H: docs/theory.md B1's straight line (black), zero at H = 0.7 "
+            "of "
             "the diameter, where the cushion's impulse passes through the ball's centre of percussion. Points: "
             "MuJoCo's measured slip (intercept of the sliding phase) for the four cases and further heights; "
             "agreement is the points on the line. Right: the slip after the rebound decaying to rolling along "
@@ -401,7 +402,7 @@ def pivoted_stick(ctx: PlotContext) -> list[Figure]:
         Figure(
             "Pivoted stick: pivot reaction impulse and the sweet spot",
             "A uniform stick pinned at one end, struck perpendicularly at distance d from the pin. The pin's "
-            "reaction impulse J (in units of the blow Pi) is THEORY.md P4's straight line (black): negative (the "
+            "reaction impulse J (in units of the blow Pi) is docs/theory.md P4's straight line (black): negative (the "
             "pin holds the stick back) for d < 2L/3, zero at the sweet spot d* = 2L/3 (the centre of percussion "
             "referred to the pivot), positive beyond. Points: MuJoCo's impulse from the stick's momentum, read "
             "once the soft pin has settled. Agreement: the points on the line; lower panel: their difference from "
@@ -481,7 +482,7 @@ def ball_stick(ctx: PlotContext) -> list[Figure]:
         Figure(
             "Ball on a free stick: velocities after the impact against the ball's mass",
             "A ball of mass m at speed u hits a resting free stick elastically at h from its centre (a real MuJoCo "
-            "contact). Lines: THEORY.md P5 with the stick's effective mass M_eff = (1/M + h^2/I)^-1 at the struck "
+            "contact). Lines: docs/theory.md P5 with the stick's effective mass M_eff = (1/M + h^2/I)^-1 at the struck "
             "point: the ball's velocity u' = u (m - M_eff)/(m + M_eff) (it stops at m = M_eff, bounces back "
             "below), the stick's CM velocity V = Pi/M and the rotational speed -omega h it gives the struck "
             "point (P1). Circles: the three cases (labelled at the ball's point); squares: further ball masses. "
@@ -531,7 +532,7 @@ def marble_shot(ctx: PlotContext) -> list[Figure]:
         Figure(
             "Marble shot: the marbles' speeds",
             "The meter stick on ice between marble A (one end) and marble C (the other), struck toward them. Thick "
-            "lines: MuJoCo's marble speeds; dashed: THEORY.md P6 + P5, following the events in order (the blow, "
+            "lines: MuJoCo's marble speeds; dashed: docs/theory.md P6 + P5, following the events in order (the blow, "
             "then the faster-approached marble, then the other with the stick's velocities after the first "
             "collision). Struck at h = L/6 (cop-at-a) the centre of percussion is at A's end: right after the blow "
             "that end is at rest (dotted: the stick point's velocity, zero until C is hit; grey line: the "

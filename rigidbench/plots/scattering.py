@@ -111,7 +111,7 @@ def hard_spheres(ctx: PlotContext) -> list[Figure]:
             "Hard spheres: scattering angle against the impact parameter",
             "CM deflection of one smooth elastic collision against b/a: the six cases and more impact parameters "
             "(the mass ratio does not change the CM angle, so all points share the curve). Top: the hard-sphere "
-            "theta = 2 arccos(b/a) of THEORY.md C5 "
+            "theta = 2 arccos(b/a) of docs/theory.md C5 "
             "(black) and the soft-contact prediction (red dashed, C8: MuJoCo's contact is the spring V = 1/2 mu "
             "k (a - r)^2) are indistinguishable at this scale, and MuJoCo's points lie on both. Bottom: the soft "
             "shift theta_hard - theta, which grows with b and scales as k^-1/2: the C8 curves at this stiffness "
@@ -172,7 +172,7 @@ def hard_spheres(ctx: PlotContext) -> list[Figure]:
         Figure(
             "Hard spheres: LAB angles against the impact parameter",
             "LAB angles of the projectile (left) and the recoiling target (right), target initially at rest, for "
-            "the cases' mass ratios (1/3, 1/2, 1, 3). Lines: THEORY.md C2 applied to the hard-sphere CM angle "
+            "the cases' mass ratios (1/3, 1/2, 1, 3). Lines: docs/theory.md C2 applied to the hard-sphere CM angle "
             "(C5); points: MuJoCo. "
             "A light projectile can bounce back (psi up to pi); equal masses leave at psi = theta/2, at right "
             "angles to the target; a heavy projectile never turns by more than psi_max = arcsin(m2/m1) (dotted), "
@@ -288,7 +288,7 @@ def cross_section(ctx: PlotContext) -> list[Figure]:
             "A beam of collisions with impact points uniform over a disc larger than the target (MuJoCo, batched), one "
             "row per mass ratio. Each histogram (the checks' own bins and counts over the whole beam) is converted "
             "to a differential cross section (counts / n times the beam area, over the bin's solid angle; error bars: "
-            "Poisson). Left: the CM angle, isotropic at a^2/4 (THEORY.md C5). Middle: the projectile's LAB angle "
+            "Poisson). Left: the CM angle, isotropic at a^2/4 (docs/theory.md C5). Middle: the projectile's LAB angle "
             "against C6's sum over branches (a^2 cos(psi) for equal masses, one branch over [0, pi] for a light "
             "projectile, two branches piling up below psi_max with an integrable singularity for a heavy one; dashed: "
             "the theory's bin averages, what the histogram estimates). Right: the target's recoil, a^2 cos(zeta) for "

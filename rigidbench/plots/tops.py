@@ -51,7 +51,7 @@ def heavy_top(ctx: PlotContext) -> list[Figure]:
             Figure(
                 f"Heavy top, {case}: theta(t) and its turning points",
                 f"Tilt of the symmetry axis from the upward vertical: MuJoCo (red dots) over the closed form of "
-                f"THEORY.md T3 (black), with the turning points theta_min and theta_max of T2 (dashed) and the "
+                f"docs/theory.md T3 (black), with the turning points theta_min and theta_max of T2 (dashed) and the "
                 f"measured extrema (blue triangles). Lower panel: the difference, at the level of the "
                 f"integration error ({settings_text(run)}).",
                 fig,
@@ -121,7 +121,7 @@ def free_asymmetric_top(ctx: PlotContext) -> list[Figure]:
                 f"Spin started 0.02 rad off the intermediate axis (I = {', '.join(f'{x:g}' for x in top.inertia)} "
                 f"kg m^2): omega_2 reverses every 2K(k)/s (dotted lines: measured sign changes of omega_2) while "
                 f"omega_1 and omega_3 pulse. Dots: MuJoCo ({settings_text(run)}); lines: the Jacobi elliptic "
-                "solution (THEORY.md A2). Lower panel: the relative difference.",
+                "solution (docs/theory.md A2). Lower panel: the relative difference.",
                 fig,
             )
         )
