@@ -440,7 +440,9 @@ def _theory_cell(row: Mapping[str, Any]) -> str:
     ref = row.get("theory_ref") or theory_ref(row.get("theory") or "")
     if not ref:
         return "-"
-    return f'<a href="{html.escape(theory_link(ref))}">{html.escape(ref)}</a>'
+    # an identity (exact by symmetry or construction, `Check.identity`) says so beside its ID
+    claim = " <small>identity</small>" if row.get("claim") == "identity" else ""
+    return f'<a href="{html.escape(theory_link(ref))}">{html.escape(ref)}</a>{claim}'
 
 
 def _orders_table(doc) -> str:

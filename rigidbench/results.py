@@ -57,6 +57,7 @@ def rows_of(run: CaseRun) -> list[dict[str, Any]]:
                 "tolerance_reason": None,
                 "theory": None,
                 "theory_ref": None,
+                "claim": None,
                 "status": DIVERGED,
                 "passed": None,
                 "diverged_at": run.diverged_at,
@@ -75,6 +76,10 @@ def rows_of(run: CaseRun) -> list[dict[str, Any]]:
             "tolerance_reason": o.check.reason,
             "theory": o.check.theory,
             "theory_ref": theory_ref(o.check.theory),
+            # an identity (exact by symmetry or construction) or an accuracy check (`Check.identity`), and a relative
+            # error's floor where it has one (`Check.floor`)
+            "claim": o.check.claim,
+            **({"tolerance_floor": o.check.floor} if o.check.floor else {}),
             "status": UNRESOLVED if o.unresolved else PASS if o.passed else FAIL,
             "passed": None if o.unresolved else o.passed,
             "diverged_at": None,

@@ -223,6 +223,7 @@ def _no_result(job: Job, settings: Settings | None) -> dict[str, Any]:
         "tolerance_reason": None,
         "theory": None,
         "theory_ref": None,
+        "claim": None,
         "status": ERROR,
         "passed": None,
         "diverged_at": None,

@@ -84,3 +84,18 @@ def test_every_relative_check_is_bounded_away_from_zero_or_has_a_floor_at_its_ra
                     if not floor > 0 and abs(expected) < 1e-12:  # SI units: 0 up to round-off
                         zero.append((slug, case.name, name, overrides, expected))
     assert not zero, zero
+
+
+def test_identities_are_labelled_in_rows_and_the_catalogue():
+    """Issue 35: a check that holds exactly by symmetry or construction says so (row ``claim``, `list --json`)."""
+    from rigidbench.commands.list import catalogue
+    from rigidbench.results import rows_of
+
+    run = registry.get("foucault").run("equator")
+    claims = {r["check"]: r["claim"] for r in rows_of(run)}
+    assert claims["equator-precession"] == "identity" and claims["platform-rate"] == "identity"
+    assert set(claims.values()) <= {"identity", "accuracy"}
+    doc = catalogue(registry.scenarios().values())
+    labelled = {(s["slug"], c["name"]) for s in doc["scenarios"] for c in s["checks"] if c["claim"] == "identity"}
+    assert ("bent-axle", "residual-torque") in labelled and ("heavy-top", "p-psi-drift") in labelled
+    assert ("heavy-top", "energy-drift") not in labelled

@@ -67,7 +67,8 @@ def print_scenario(sc) -> None:
     for ch in sc.checks:
         ref = theory_ref(ch.theory)
         link = f" {theory_link(ref)}" if ref else ""
-        print(f"    {ch.name:<24} tol {ch.tolerance:.3g} {ch.kind:<3}  [{ch.theory}]{link}")
+        claim = " (identity)" if ch.identity else ""
+        print(f"    {ch.name:<24} tol {ch.tolerance:.3g} {ch.kind:<3}{claim}  [{ch.theory}]{link}")
     print()
 
 
@@ -135,6 +136,7 @@ def scenario_record(sc) -> dict[str, Any]:
                 "unit": ch.unit,
                 "tolerance": ch.tolerance,
                 "kind": ch.kind,
+                "claim": ch.claim,
                 "reason": ch.reason,
                 "theory": ch.theory,
                 "theory_ref": theory_ref(ch.theory),
