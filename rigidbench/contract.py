@@ -4,8 +4,9 @@ A scenario is an MJCF file in ``models/`` and a `Scenario` subclass with the sam
 The subclass declares its public parameters (`Param`, with units and ranges), its named `Case`\ s, its `Check`\ s
 (each with a tolerance, the reason for it and the theory it tests), the `Domain`\ s its closed forms need, and
 implements a few hooks: `initial_state`, `predict` (from ``analytic/``), `duration` and `measure`, and where the
-physics asks for them `reference_settings`, `validate`, `control`, `simulate`. Start from ``envs/pendulum.py``
-(docs/scenarios.md, "Add a scenario").
+physics asks for them `reference_settings`, `validate`, `control`, `simulate`. Start from the template,
+``docs/templates/vertical_throw.py`` (docs/scenarios.md, "Adding a scenario"). A first scenario can skip the float32
+hooks (`roundoff_scale`, `precision_domain`) and the per-check prediction entries other than ``"_tolerance"``.
 
 What is done with a scenario (resolving parameters, compiling through MjSpec, starting, predicting, running,
 scoring, float32 round-off floors) is the harness's (`rigidbench.harness`), which imports scenarios and never the

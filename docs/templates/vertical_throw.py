@@ -63,7 +63,8 @@ class VerticalThrow(Scenario):
     checks = CHECKS
 
     def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
-        """The timestep follows the only time scale, the flight time 2 v0 / g: a thousandth of it."""
+        """The timestep follows the only time scale, the flight time 2 v0 / g: a thousandth of it (the model file's
+        timestep is this rule's value at the defaults, so the file and the derived settings agree)."""
         flight = 2 * params["speed"] / params["g"]
         return {"timestep": Derived(round_step(flight / 1000), f"dt = T / 1000, T = 2 v0 / g = {flight:.4g} s")}
 
@@ -120,6 +121,7 @@ class VerticalThrowEnv(ScenarioEnv):
         return gym.spaces.Box(-np.inf, np.inf, shape=(2,), dtype=np.float64)
 
     def define_action_space(self) -> gym.spaces.Box:
+        # The physical bounds in SI units; the agent sees them normalised to Box(-1, 1) float32 (`ScenarioEnv`).
         return gym.spaces.Box(-self.max_force, self.max_force, shape=(1,), dtype=np.float64)
 
     def observe(self) -> np.ndarray:
