@@ -18,10 +18,9 @@ does not derive is drawn:
   ratios and large amplitudes live there.
 
 A parameter whose range depends on others (`Param.within`, or a case regime given as a `Bound`) is drawn after
-the parameters it needs. A value the case derives from the others is drawn too in one draw in four
-(`DERIVED_PROBABILITY`), since a user may set it. A budget parameter (`Param.budget`: a Monte Carlo sample count,
-steps per contact) is drawn between its lower end and its default, so that a census costs what a run costs: larger
-values only tighten statistics or resolution (the `thorough` profile and the scenario's tests run those).
+the parameters it needs. A budget parameter (`Param.budget`: a Monte Carlo sample count, steps per contact) is
+drawn between its lower end and its default, so that a census costs what a run costs: larger values only tighten
+statistics or resolution (the `thorough` profile and the scenario's tests run those).
 """
 
 from __future__ import annotations
@@ -44,10 +43,6 @@ from rigidbench.scenario import Case, OutsideDomain, Scenario
 from rigidbench.settings import Settings
 
 EDGE_PROBABILITY = 1 / 3
-# The share of draws in which a value the case derives (a steady-precession rate, the marble shot's centre of
-# percussion) is drawn like a free parameter, as a user's ``--set`` of it would be: every set a case accepts can be
-# drawn (issue 35: a case that accepted any offset never had one drawn).
-DERIVED_PROBABILITY = 1 / 4
 EDGE_SPAN = 0.02  # an edge draw lies within 2 % of the range's (log-)span from one of its ends
 LOG_SPAN = 10.0  # a positive range spanning at least this factor is drawn log-uniformly
 SMALL = 1e-6  # a range straddling zero: log-uniform magnitudes go down to this fraction of its largest end
@@ -234,8 +229,6 @@ def draw(scenario: Scenario, case: Case, rng: np.random.Generator) -> dict[str, 
 
 def _draw_once(scenario: Scenario, case: Case, rng: np.random.Generator) -> dict[str, Value]:
     derived = {name for name, v in case.values.items() if callable(v)}
-    if derived:  # a user may set a value the case derives (it wins): drawn too, in one draw in `DERIVED_PROBABILITY`
-        derived = {name for name in sorted(derived) if rng.random() >= DERIVED_PROBABILITY}
     free = [p for p in _order(scenario, case) if p.name not in derived]
     edges: dict[str, str] = {}
     if free and rng.random() < EDGE_PROBABILITY:
