@@ -28,8 +28,7 @@ from rigidbench.analytic.heavy_top import (  # noqa: F401 (their old import path
     scales,
 )
 from rigidbench.contract import Case, Check, Derived, Scenario, Trajectory
-from rigidbench.envs.heavy_top_domain import (  # noqa: F401 (also their old import path)
-    _ALL_NAMES,
+from rigidbench.envs.heavy_top_domain import (  # noqa: F401 (public names keep their old import path)
     _AT_REST,
     _FAST_SPIN,
     _OFF_VERTICAL,
@@ -51,19 +50,11 @@ from rigidbench.envs.heavy_top_domain import (  # noqa: F401 (also their old imp
     SLEEPING_TILT,
     THETA_FLOOR,
     Plan,
-    _acceleration,
-    _advancing,
-    _falling,
-    _linear_max_tilt,
-    _mgh,
     _pivot_inertia,
     _plan_or_none,
-    _run_length,
     _spin_bound,
     _steady,
-    _steady_by_derivation,
     _threshold,
-    _where,
     closed_form,
     plan,
     reference_run,

@@ -6,7 +6,7 @@ The subclass declares its public parameters (`Param`, with units and ranges), it
 implements a few hooks: `initial_state`, `predict` (from ``analytic/``), `duration` and `measure`, and where the
 physics asks for them `reference_settings`, `validate`, `control`, `simulate`. Start from the template,
 ``docs/templates/vertical_throw.py`` (docs/scenarios.md, "Adding a scenario"). A first scenario can skip the float32
-hooks (`roundoff_scale`, `precision_domain`) and the per-check prediction entries other than ``"_tolerance"``.
+hook (`precision_domain`) and the per-check prediction entries other than ``"_tolerance"``.
 
 What is done with a scenario (resolving parameters, compiling through MjSpec, starting, predicting, running,
 scoring, float32 round-off floors) is the harness's (`rigidbench.harness`), which imports scenarios and never the
@@ -70,7 +70,7 @@ UNRESOLVED_FRACTION = 0.1
 
 # The prediction's entries keyed by check name (`Scenario.check_prediction_keys`): a tolerance and a relative check's
 # floor that depend on the run (`Scenario._scaled_check`, `Check.floor`), and a float32 engine's round-off scale,
-# secular quantities and derived floors (`Scenario.roundoff_scale`, `Scenario._roundoff_check`).
+# secular quantities and derived floors (`rigidbench.harness.roundoff_scale`, `rigidbench.harness.roundoff_check`).
 PER_CHECK = ("_tolerance", "_floor", "_roundoff_scale", "_roundoff_secular", "_roundoff_eps")
 
 
@@ -242,8 +242,8 @@ class Scenario:
     """Base class of every scenario: set the class attributes, implement the hooks.
 
     Hooks a scenario must implement: `initial_state`, `predict`, `duration`, `measure`. Hooks it may override:
-    `validate`, `reference_settings`, `apply_derived`, `check_model`, `control`, `simulate`, `precision_domain`,
-    `roundoff_scale`. Everything below "what the harness does" is not for overriding.
+    `validate`, `reference_settings`, `apply_derived`, `check_model`, `control`, `simulate`, `precision_domain`.
+    Everything below "what the harness does" is not for overriding.
 
     Class attributes
     ----------------
@@ -338,36 +338,6 @@ class Scenario:
         initial states, extra runs at other settings) override it and return any object with the attributes
         `measure` needs plus ``time`` (the sample times of one run) and ``diverged_at``."""
         return harness().simulate(model, data, duration, control=control)
-
-    def roundoff_scale(self, name: str, prediction: Mapping[str, Any]) -> float:
-        """The size of check `name`'s quantity, in its unit, that a float32 engine's round-off is relative to
-        (`rigidbench.engines.roundoff_floor`): 1 for a relative error or a dimensionless ratio, else the expected
-        value's size (at least 1 rad for an angle, whose rounding is absolute: a relative check of an angle theta
-        has scale max(theta, 1 rad) / theta).
-
-        A scenario gives the scale as ``prediction["_roundoff_scale"][name]`` where the quantity is expected to be 0
-        in a unit (e.g. the ball's speed for a slip that should vanish), where its motion amplifies round-off (a
-        spin near the separatrix), or where its measurement subtracts large numbers (a spacing between positions far
-        from the origin), in units of the quantity. A quantity read from a coordinate that a steady motion advances
-        every step is named in ``prediction["_roundoff_secular"]`` (its floor grows like the step count). A floor the
-        scenario derives itself, proportional to the precision's eps, is ``prediction["_roundoff_eps"][name]`` in
-        units of eps (or, where it is not proportional, a function of eps giving the floor), with
-        ``prediction["_roundoff_eps_rule"]`` saying where it comes from (`_roundoff_check`).
-        """
-        check = self.check(name)
-        given = prediction.get("_roundoff_scale", {}).get(name)
-        if given is not None:
-            return float(given)
-        if check.unit == "rad":
-            # An angle is read from an orientation whose numbers are O(1): float32 rounds it to an absolute
-            # ~eps rad, however small the angle, so a relative check of a small angle theta sees 1 rad / theta.
-            size = abs(float(prediction[name]))
-            if check.kind == "rel":
-                return max(size, 1.0) / size if size > 0 else 1.0
-            return max(size, 1.0)
-        if check.kind == "rel" or check.unit == "1":
-            return 1.0
-        return abs(float(prediction[name]))
 
     def precision_domain(
         self, model: mujoco.MjModel, data: mujoco.MjData, prediction: Mapping[str, Any], precision: str
@@ -477,6 +447,11 @@ class Scenario:
     def check_prediction_keys(self, prediction: Mapping[str, Any]) -> None:
         """Refuse per-check prediction entries naming no check (`rigidbench.harness.check_prediction_keys`)."""
         harness().check_prediction_keys(self, prediction)
+
+    def roundoff_scale(self, name: str, prediction: Mapping[str, Any]) -> float:
+        """The size a float32 engine's round-off of check `name` is relative to (`rigidbench.harness.roundoff_scale`;
+        a scenario sets it through ``prediction["_roundoff_scale"]``, not by overriding this)."""
+        return harness().roundoff_scale(self, name, prediction)
 
     def _scaled_check(self, name: str, prediction: Mapping[str, Any]) -> Check:
         return harness().scaled_check(self, name, prediction)

@@ -47,6 +47,7 @@ __all__ = [
     "prepare",
     "resolve",
     "roundoff_check",
+    "roundoff_scale",
     "run",
     "scaled_check",
     "settings_record",
@@ -121,6 +122,37 @@ def scaled_check(scenario: Scenario, name: str, prediction: Mapping[str, Any]) -
     return check
 
 
+def roundoff_scale(scenario: Scenario, name: str, prediction: Mapping[str, Any]) -> float:
+    """The size of check `name`'s quantity, in its unit, that a float32 engine's round-off is relative to
+    (`rigidbench.engines.roundoff_floor`): 1 for a relative error or a dimensionless ratio, else the expected
+    value's size (at least 1 rad for an angle, whose rounding is absolute: a relative check of an angle theta
+    has scale max(theta, 1 rad) / theta).
+
+    A scenario gives the scale as ``prediction["_roundoff_scale"][name]`` where the quantity is expected to be 0
+    in a unit (e.g. the ball's speed for a slip that should vanish), where its motion amplifies round-off (a
+    spin near the separatrix), or where its measurement subtracts large numbers (a spacing between positions far
+    from the origin), in units of the quantity. A quantity read from a coordinate that a steady motion advances
+    every step is named in ``prediction["_roundoff_secular"]`` (its floor grows like the step count). A floor the
+    scenario derives itself, proportional to the precision's eps, is ``prediction["_roundoff_eps"][name]`` in
+    units of eps (or, where it is not proportional, a function of eps giving the floor), with
+    ``prediction["_roundoff_eps_rule"]`` saying where it comes from (`_roundoff_check`).
+    """
+    check = scenario.check(name)
+    given = prediction.get("_roundoff_scale", {}).get(name)
+    if given is not None:
+        return float(given)
+    if check.unit == "rad":
+        # An angle is read from an orientation whose numbers are O(1): float32 rounds it to an absolute
+        # ~eps rad, however small the angle, so a relative check of a small angle theta sees 1 rad / theta.
+        size = abs(float(prediction[name]))
+        if check.kind == "rel":
+            return max(size, 1.0) / size if size > 0 else 1.0
+        return max(size, 1.0)
+    if check.kind == "rel" or check.unit == "1":
+        return 1.0
+    return abs(float(prediction[name]))
+
+
 def roundoff_check(
     scenario: Scenario, check: Check, prediction: Mapping[str, Any], precision: str, nstep: int
 ) -> tuple[Check, bool]:
@@ -133,7 +165,7 @@ def roundoff_check(
     """
 
     secular = check.name in prediction.get("_roundoff_secular", ())
-    floor, rule = roundoff_floor(precision, nstep, scenario.roundoff_scale(check.name, prediction), secular=secular)
+    floor, rule = roundoff_floor(precision, nstep, roundoff_scale(scenario, check.name, prediction), secular=secular)
     if floor == 0:
         return check, False
     # A scenario that derives its own round-off floor as a multiple of the precision's eps (the float64 floor
