@@ -71,6 +71,10 @@ class ScenarioEnv(gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 30}
     scenario_cls: ClassVar[type[Scenario]]
     default_frame_skip: ClassVar[int] = 10
+    # Whether the case's regime (`Case.ranges`, where its checks' closed forms hold) binds the env's parameters. A
+    # control task whose action moves a parameter over its whole range, and whose reward reads its own measurement
+    # rather than the case's checks, sets False; parameter ranges and the theory's domains still apply.
+    case_regime: ClassVar[bool] = True
     # Attributes a copy or a pickle leaves out because the env recomputes them when it needs them (caches that
     # may hold what cannot be pickled, e.g. a solver's dense output).
     _recomputed: ClassVar[tuple[str, ...]] = ()
@@ -390,9 +394,9 @@ class ScenarioEnv(gym.Env):
             ask = (case, tuple(sorted((k, type(v), v) for k, v in params.items())))
             resolved = self._resolved.get(ask)
         except TypeError:
-            return self.scenario.resolve(self.scenario.case(case), params)
+            return self.scenario.resolve(self.scenario.case(case), params, regime=self.case_regime)
         if resolved is None:
-            resolved = self.scenario.resolve(self.scenario.case(case), params)
+            resolved = self.scenario.resolve(self.scenario.case(case), params, regime=self.case_regime)
             if len(self._resolved) >= 16:
                 self._resolved.pop(next(iter(self._resolved)))
             self._resolved[ask] = resolved

@@ -85,6 +85,9 @@ class PercussionStrikeEnv(ShotTask):
     env_id = "rigidbench/PercussionStrike-v0"
     scenario_cls = MarbleShot
     task_case = "cop-at-a"
+    # The action strikes anywhere in [L/12, L/2]; the reward reads the marbles' speeds against the task's own closed
+    # form (`_after_c`, `_a_end`), not the case's checks, whose regime ([0.035 L, 1.05 L/6]) does not bind it.
+    case_regime = False
     target_names = ("speed",)
     reward_terms = ("marble_a", "stick_at_a", "marble_c")
     offset_range: ClassVar[tuple[float, float]] = (1 / 12, 1 / 2)  # fractions of L

@@ -399,14 +399,14 @@ class Scenario:
 
     # ---- what the harness does with a scenario (`rigidbench.harness`; not for overriding) ----------------
 
-    def resolve(self, case: Case, overrides: Mapping[str, object] | None = None) -> Params:
+    def resolve(self, case: Case, overrides: Mapping[str, object] | None = None, *, regime: bool = True) -> Params:
         """Parameters for `case`: defaults, the case's values, the user's overrides; checked, domains included
         (`rigidbench.harness.resolve`)."""
-        return harness().resolve(self, case, overrides)
+        return harness().resolve(self, case, overrides, regime=regime)
 
-    def check_domain(self, case: Case, values: Mapping[str, Value]) -> None:
+    def check_domain(self, case: Case, values: Mapping[str, Value], *, regime: bool = True) -> None:
         """Refuse parameters outside the case's regime or a domain of the theory (`rigidbench.harness.check_domain`)."""
-        harness().check_domain(self, case, values)
+        harness().check_domain(self, case, values, regime=regime)
 
     def build(self, params: Mapping[str, Value], settings: Any = None) -> mujoco.MjModel:
         """The compiled model with `params` and `settings` applied (`rigidbench.harness.build`)."""

@@ -207,9 +207,14 @@ def check_prediction_keys(scenario: Scenario, prediction: Mapping[str, Any]) -> 
             )
 
 
-def resolve(scenario: Scenario, case: Case, overrides: Mapping[str, object] | None = None) -> Params:
+def resolve(
+    scenario: Scenario, case: Case, overrides: Mapping[str, object] | None = None, *, regime: bool = True
+) -> Params:
     """Parameters for `case`: model defaults, then the case's values, then the user's overrides;
-    derived case values are computed last from the others, unless the user set them.
+    derived case values are computed last from the others, unless the user set them. With ``regime=False`` the
+    case's regime (`Case.ranges`: where its checks' closed forms hold) is not applied, the parameters' ranges and the
+    theory's domains are: for a control task that moves a parameter over its whole range and scores its own
+    measurement, not the case's checks (`rigidbench.envs.base.ScenarioEnv.case_regime`).
 
     Raises
     ------
@@ -236,19 +241,20 @@ def resolve(scenario: Scenario, case: Case, overrides: Mapping[str, object] | No
     for p in scenario.params:
         p.check_within(values[p.name], values)
     scenario.validate(values)
-    scenario.check_domain(case, values)
+    scenario.check_domain(case, values, regime=regime)
     return values
 
 
-def check_domain(scenario: Scenario, case: Case, values: Mapping[str, Value]) -> None:
-    """Refuse parameters outside the case's regime or a domain of the theory (`OutsideDomain`).
+def check_domain(scenario: Scenario, case: Case, values: Mapping[str, Value], *, regime: bool = True) -> None:
+    """Refuse parameters outside the case's regime (unless ``regime=False``) or a domain of the theory
+    (`OutsideDomain`).
 
     Raises
     ------
     OutsideDomain
         Naming the parameter(s), their values, the theory and its condition.
     """
-    for name, bound in case.ranges.items():
+    for name, bound in case.ranges.items() if regime else ():
         p = scenario.param(name)
         interval = bound.range(values) if isinstance(bound, Bound) else bound
         if any(float(x) not in interval for x in np.ravel(values[name])):
