@@ -51,19 +51,7 @@ def main(args: argparse.Namespace) -> int:
         return settings, jobs
 
     t0 = time.perf_counter()
-    ran = session.run(
-        "census",
-        session.CENSUS_INVOCATION,
-        given=session.invocation(args, session.CENSUS_INVOCATION),
-        default=session.invocation(shared.defaults(arguments, "census"), session.CENSUS_INVOCATION),
-        resume=args.resume,
-        jsonl=args.jsonl,
-        plan=plan,
-        cluster=args.cluster,
-        workers=lambda: shared.workers(args.jobs),
-        progress=None if args.quiet else shared.progress,
-        say=None if args.quiet else shared.say,
-    )
+    ran = shared.journaled_run(args, arguments, "census", session.CENSUS_INVOCATION, plan)
     result = ran.result
     census.settle(drawn, result)
     out = shared.human(args.json)

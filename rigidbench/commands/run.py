@@ -49,19 +49,7 @@ def main(args: argparse.Namespace) -> int:
         return settings, runner.plan(args.targets, shared.parse_sets(args.sets), settings)
 
     t0 = time.perf_counter()
-    ran = session.run(
-        "run",
-        session.RUN_INVOCATION,
-        given=session.invocation(args, session.RUN_INVOCATION),
-        default=session.invocation(shared.defaults(arguments, "run"), session.RUN_INVOCATION),
-        resume=args.resume,
-        jsonl=args.jsonl,
-        plan=plan,
-        cluster=args.cluster,
-        workers=lambda: shared.workers(args.jobs),
-        progress=None if args.quiet else shared.progress,
-        say=None if args.quiet else shared.say,
-    )
+    ran = shared.journaled_run(args, arguments, "run", session.RUN_INVOCATION, plan)
     jobs, result, path = ran.jobs, ran.result, ran.path
     rows = result.ordered()
     completion = results.Completion(

@@ -227,3 +227,23 @@ def progress(i: int, n: int, job) -> None:
 
 def say(text: str) -> None:
     print(text, file=sys.stderr)
+
+
+def journaled_run(args: argparse.Namespace, arguments, verb: str, invocation, plan):
+    """`rigidbench.session.run` of a `verb` that runs jobs (``run``, ``census``): its journal, ``--resume``, cluster,
+    workers and progress, from the verb's `args` (`invocation`: the arguments a resumed journal must match)."""
+    from rigidbench import session
+
+    return session.run(
+        verb,
+        invocation,
+        given=session.invocation(args, invocation),
+        default=session.invocation(defaults(arguments, verb), invocation),
+        resume=args.resume,
+        jsonl=args.jsonl,
+        plan=plan,
+        cluster=args.cluster,
+        workers=lambda: workers(args.jobs),
+        progress=None if args.quiet else progress,
+        say=None if args.quiet else say,
+    )
