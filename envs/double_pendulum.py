@@ -130,6 +130,17 @@ def amplitude_limit(p: Mapping[str, Any], mode: int | None) -> float:
     return float(min(1.0, np.sqrt(min(limits))))
 
 
+def _in_mode(mode: int) -> Bound:
+    """The one amplitude2 that releases the pendulum in mode `mode`'s shape: r amplitude1 (`_mode_ratio`)."""
+    text = "r amplitude1, r the " + ("slow" if mode == 0 else "fast") + " mode's ratio th2/th1 (O6)"
+
+    def exact(p: Mapping[str, Any]) -> Range:
+        value = _mode_ratio(p, mode) * p["amplitude1"]
+        return Range(value, value)
+
+    return Bound(text, exact, ("mass1", "mass2", "length1", "length2", "g", "amplitude1"))
+
+
 def _amplitude_regime(mode: int | None) -> Bound:
     return Bound(
         "[-a_max, a_max], a_max(mass1, mass2, length1, length2, g) from the first-order amplitude shift (case regime)",
@@ -195,16 +206,20 @@ class DoublePendulum(Scenario):
             "released in the slow mode's shape (th2/th1 = +sqrt 2 for equal masses and lengths)",
             {"amplitude2": lambda p: _mode_ratio(p, 0) * p["amplitude1"]},
             ("omega-slow", "shape-slow", "energy-drift"),
-            ranges={"amplitude1": _amplitude_regime(0)},
-            regime=_REGIME,
+            ranges={"amplitude1": _amplitude_regime(0), "amplitude2": _in_mode(0)},
+            regime=_REGIME
+            + "; released in the mode's shape (amplitude2 = r amplitude1): another amplitude2 mixes both "
+            "modes, whose frequencies and shapes the case's checks read one at a time",
         ),
         Case(
             "fast-mode",
             "released in the fast mode's shape (th2/th1 = -sqrt 2 for equal masses and lengths)",
             {"amplitude2": lambda p: _mode_ratio(p, 1) * p["amplitude1"]},
             ("omega-fast", "shape-fast", "energy-drift"),
-            ranges={"amplitude1": _amplitude_regime(1)},
-            regime=_REGIME,
+            ranges={"amplitude1": _amplitude_regime(1), "amplitude2": _in_mode(1)},
+            regime=_REGIME
+            + "; released in the mode's shape (amplitude2 = r amplitude1): another amplitude2 mixes both "
+            "modes, whose frequencies and shapes the case's checks read one at a time",
         ),
         Case(
             "released",

@@ -139,10 +139,18 @@ class PivotedStick(Scenario):
         Param(
             "strike",
             "m",
-            "distance d from the pivot along the stick to the strike point, in [L/1000, L]",
+            "distance d from the pivot along the stick to the strike point, in [L/20, L]",
             Range(1e-6, 100.0),
             SitePosition("strike", 1),
-            within=Bound("[L/1000, L]: on the stick", lambda p: Range(p["length"] / 1000, p["length"]), ("length",)),
+            # At least L/20 from the pivot: nearer, the pin takes nearly the whole blow and the stick's small turn
+            # carries the pin's fixed compliance error (angular velocity and pivot drift 1.6 and 2.9 times their
+            # tolerances at L/100, 4.1 and 5.8 at L/250; 0.27 and 0.54 at L/20: measured, struck at the end's
+            # settings; the shot is self-similar in L).
+            within=Bound(
+                "[L/20, L]: on the stick, at least L/20 from the pivot",
+                lambda p: Range(p["length"] / 20, p["length"]),
+                ("length",),
+            ),
         ),
     )
     cases = (

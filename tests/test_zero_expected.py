@@ -99,3 +99,21 @@ def test_identities_are_labelled_in_rows_and_the_catalogue():
     labelled = {(s["slug"], c["name"]) for s in doc["scenarios"] for c in s["checks"] if c["claim"] == "identity"}
     assert ("bent-axle", "residual-torque") in labelled and ("heavy-top", "p-psi-drift") in labelled
     assert ("heavy-top", "energy-drift") not in labelled
+
+
+def test_pivoted_stick_refuses_a_strike_nearer_the_pivot_than_l_over_20_and_passes_at_it():
+    """Issue 35 (a census drawing the strike found it): [L/1000, L] was printed, and below ~L/30 the angular velocity
+    and the pivot's drift fail (1.6 and 2.9 times their tolerances at L/100)."""
+    scenario = registry.get("pivoted-stick")
+    length = scenario.defaults()["length"]
+    with pytest.raises(ValueError, match="outside its range"):
+        scenario.prepare("end", {"strike": length / 100})
+    run = scenario.run("end", {"strike": length / 20})
+    assert all(o.passed for o in run.outcomes), [(o.check.name, o.error / o.check.tolerance) for o in run.outcomes]
+
+
+def test_double_pendulum_mode_cases_refuse_a_second_amplitude_off_the_modes_shape():
+    scenario = registry.get("double-pendulum")
+    with pytest.raises(OutsideDomain, match="outside the regime of case 'slow-mode'"):
+        scenario.prepare("slow-mode", {"amplitude1": 0.001, "amplitude2": -0.2})
+    assert scenario.prepare("slow-mode", {"amplitude1": 0.001}).params["amplitude2"] > 0
