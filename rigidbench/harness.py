@@ -241,7 +241,7 @@ def resolve(
     for p in scenario.params:
         p.check_within(values[p.name], values)
     scenario.validate(values)
-    scenario.check_domain(case, values, regime=regime)
+    check_domain(scenario, case, values, regime=regime)
     return values
 
 
@@ -401,10 +401,10 @@ def prepare(
         longer than the step or memory limits (`rigidbench.simulate.check_run_size`).
     """
     c = scenario.case(case)
-    params = scenario.resolve(c, overrides)
-    model = scenario.build(params, settings)
+    params = resolve(scenario, c, overrides)
+    model = build(scenario, params, settings)
     actual = scenario.read_params(model)
-    data = scenario.start(model, actual)
+    data = start(scenario, model, actual)
     engine = settings.engine_object() if settings is not None and settings.engine is not None else None
     if engine is not None and engine.precision != "float64":
         # Predict from what the engine simulates: the model and initial state rounded to its precision
@@ -413,9 +413,9 @@ def prepare(
         model, data = stored(model, data, engine.precision)
         actual = scenario.read_params(model)
     prediction = scenario.predict(model, data)
-    scenario.check_prediction_keys(prediction)
+    check_prediction_keys(scenario, prediction)
     if engine is not None:
-        scenario.check_precision(model, data, prediction, engine.name, engine.precision)
+        check_precision(scenario, model, data, prediction, engine.name, engine.precision)
     duration = float(scenario.duration(prediction))
     if not (math.isfinite(duration) and duration > 0):
         raise ValueError(
@@ -454,7 +454,7 @@ def run(
         For invalid parameters or settings (before anything is simulated); see `prepare`.
     """
 
-    prep = scenario.prepare(case, overrides, settings)
+    prep = prepare(scenario, case, overrides, settings)
     model, data, prediction = prep.model, prep.data, prep.prediction
     control = scenario.control(model, model.opt.timestep, prep.nstep)
     simulated = model
@@ -480,15 +480,15 @@ def run(
         measured = scenario.measure(model, traj, prediction)
         precision = engine.precision if engine is not None else "float64"
         for name in prep.case.checks:
-            check, unresolved = scenario._roundoff_check(
-                scenario._scaled_check(name, prediction), prediction, precision, len(traj.time) - 1
+            check, unresolved = roundoff_check(
+                scenario, scaled_check(scenario, name, prediction), prediction, precision, len(traj.time) - 1
             )
             outcomes.append(Outcome(check, float(measured[name]), float(prediction[name]), unresolved))
     return CaseRun(
         scenario=scenario.slug,
         case=prep.case.name,
         params=prep.params,
-        settings=scenario.settings_record(model, settings),
+        settings=settings_record(model, settings),
         outcomes=outcomes,
         diverged_at=traj.diverged_at,
         duration=prep.duration,
@@ -525,7 +525,7 @@ def settings_for(profile_name: str, *, integrator: str | None = None, timestep: 
 def env_model(scenario: Scenario, params: Mapping[str, Value], settings: Settings, precision: str) -> mujoco.MjModel:
     """The model an env steps: built (`build`) and stored in `precision` (`rigidbench.engines.stored_model`)."""
 
-    return stored_model(scenario.build(params, settings), precision)
+    return stored_model(build(scenario, params, settings), precision)
 
 
 def env_start(scenario: Scenario, model: mujoco.MjModel, precision: str, engine: str) -> tuple:
@@ -539,11 +539,11 @@ def env_start(scenario: Scenario, model: mujoco.MjModel, precision: str, engine:
     """
 
     actual = scenario.read_params(model)
-    data = scenario.start(model, actual)
+    data = start(scenario, model, actual)
     if precision != "float64":
         data = stored_state(model, data, precision)
     prediction = scenario.predict(model, data)
-    scenario.check_precision(model, data, prediction, engine, precision)
+    check_precision(scenario, model, data, prediction, engine, precision)
     return (actual, data, prediction, float(scenario.duration(prediction)), read_settings(model))
 
 
