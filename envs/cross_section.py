@@ -74,6 +74,7 @@ CHECKS = (
         "abs",
         _GOF + "; bins equal in cos(theta)",
         "C5: dsigma/dOmega_CM = a^2/4 (isotropic), Wilcox section 9.9; measured = p-value, expected 1",
+        false_alarm=ALPHA,
     ),
     Check(
         "projectile-distribution-pvalue",
@@ -84,6 +85,7 @@ CHECKS = (
         "(the shift of the limit by a 1e-5 energy error; 7e-6 rad at x = 3; on float32, by the positions' "
         "rounding's energy floor instead, `precision_floor`) count in the top bin",
         "C6: sigma_lab(psi) = sum over branches sigma_CM (x cos psi +- s)^2 / s, eqs 9.62, 9.64; p-value",
+        false_alarm=ALPHA,
     ),
     Check(
         "target-distribution-pvalue",
@@ -92,6 +94,7 @@ CHECKS = (
         "abs",
         _GOF + "; bins equal in zeta over [0, pi/2]",
         "C6: sigma_2(zeta) = a^2 cos(zeta); p-value",
+        false_alarm=ALPHA,
     ),
     Check(
         "total-cross-section",

@@ -164,6 +164,7 @@ CHECKS = (
         _GOF + "; bins of equal probability in theta over [theta_min, pi]",
         "C7: dsigma/dOmega = (k/4E)^2 / sin^4(theta/2), eq 9.13, cut at theta_min (b_max = D cot(theta_min/2)); "
         "p-value",
+        false_alarm=ALPHA,
     ),
     Check(
         "projectile-distribution-pvalue",
@@ -172,6 +173,7 @@ CHECKS = (
         "abs",
         _GOF + "; bins equal in psi over [psi(theta_min), psi_top]",
         "C6: sigma_lab(psi) = sum over branches sigma_CM (x cos psi +- s)^2 / s, eqs 9.62, 9.64; p-value",
+        false_alarm=ALPHA,
     ),
     Check(
         "target-distribution-pvalue",
@@ -180,6 +182,7 @@ CHECKS = (
         "abs",
         _GOF + "; bins equal in zeta over [0, (pi - theta_min) / 2]",
         "C6: sigma_2(zeta) = 4 cos(zeta) sigma_CM(pi - 2 zeta); p-value",
+        false_alarm=ALPHA,
     ),
     Check(
         "lab-log-drift",

@@ -18,9 +18,17 @@ does not derive is drawn:
   ratios and large amplitudes live there.
 
 A parameter whose range depends on others (`Param.within`, or a case regime given as a `Bound`) is drawn after
-the parameters it needs. A budget parameter (`Param.budget`: a Monte Carlo sample count, steps per contact) is
-drawn between its lower end and its default, so that a census costs what a run costs: larger values only tighten
-statistics or resolution (the `thorough` profile and the scenario's tests run those).
+the parameters it needs. A value the case derives from the others is drawn too in one draw in four
+(`DERIVED_PROBABILITY`), since a user may set it. A budget parameter (`Param.budget`: a Monte Carlo sample count,
+steps per contact) is drawn between its lower end and its default, so that a census costs what a run costs: larger
+values only tighten statistics or resolution (the `thorough` profile and the scenario's tests run those).
+
+A statistical test (`Check.false_alarm`: a Monte Carlo sample's goodness of fit at level alpha) fails for one correct
+set in 1/alpha, so a census of enough draws meets such failures by chance. A draw that failed only statistical tests
+is run once more on an independent sample (its sampling seed, the parameter `SAMPLE_SEED`, replaced by one derived
+from it): a correct simulation fails both with probability alpha^2, a wrong one fails both. Such a draw counts as
+passed only if its second sample passes every check; the table gives how many statistical tests failed on a first
+sample beside the number a correct simulation fails on average (the sum of their levels).
 """
 
 from __future__ import annotations
@@ -43,11 +51,18 @@ from rigidbench.scenario import Case, OutsideDomain, Scenario
 from rigidbench.settings import Settings
 
 EDGE_PROBABILITY = 1 / 3
+# The share of draws in which a value the case derives (a steady-precession rate, the marble shot's centre of
+# percussion) is drawn like a free parameter, as a user's ``--set`` of it would be: every set a case accepts can be
+# drawn (issue 35: a case that accepted any offset never had one drawn).
+DERIVED_PROBABILITY = 1 / 4
 EDGE_SPAN = 0.02  # an edge draw lies within 2 % of the range's (log-)span from one of its ends
 LOG_SPAN = 10.0  # a positive range spanning at least this factor is drawn log-uniformly
 SMALL = 1e-6  # a range straddling zero: log-uniform magnitudes go down to this fraction of its largest end
 
 PASSED, FAILED, REFUSED, CRASHED = "passed", "failed", "refused", "crashed"
+# The parameter that seeds a Monte Carlo scenario's sample (a draw failing only statistical tests is re-run with
+# another value of it).
+SAMPLE_SEED = "seed"
 
 
 @dataclass
@@ -63,6 +78,8 @@ class Draw:
     message: str = ""  # the full refusal message
     rows: list[dict[str, Any]] = field(default_factory=list)
     job: Job | None = field(default=None, repr=False)
+    # a draw that failed only statistical tests: its second, independent sample (`second_samples`)
+    second: dict[str, Any] | None = None
 
     def command(self) -> str:
         """The `rigidbench run` command that reproduces this draw."""
@@ -78,6 +95,8 @@ class Draw:
             "status": self.status,
             "command": self.command(),
         }
+        if self.second is not None:
+            out["second_sample"] = self.second
         if self.reason:
             out["reason"] = self.reason
         if self.message:
@@ -229,6 +248,8 @@ def draw(scenario: Scenario, case: Case, rng: np.random.Generator) -> dict[str, 
 
 def _draw_once(scenario: Scenario, case: Case, rng: np.random.Generator) -> dict[str, Value]:
     derived = {name for name, v in case.values.items() if callable(v)}
+    if derived:  # a user may set a value the case derives (it wins): drawn too, in one draw in `DERIVED_PROBABILITY`
+        derived = {name for name in sorted(derived) if rng.random() >= DERIVED_PROBABILITY}
     free = [p for p in _order(scenario, case) if p.name not in derived]
     edges: dict[str, str] = {}
     if free and rng.random() < EDGE_PROBABILITY:
@@ -323,6 +344,63 @@ def settle(draws: Sequence[Draw], result: RunResult) -> None:
             d.reason = ", ".join(sorted({r["check"] for r in rows if r["status"] in (FAIL, DIVERGED)}))
 
 
+def _statistical_only(d: Draw) -> bool:
+    failing = [r for r in d.rows if r["status"] in (FAIL, DIVERGED)]
+    return d.status == FAILED and bool(failing) and all(r.get("claim") == "statistical" for r in failing)
+
+
+def second_sample_seed(first: Value) -> int:
+    """An independent sampling seed for a draw whose sample was seeded with `first` (deterministic)."""
+    return int(np.random.default_rng([int(first), 1]).integers(0, 2**53))
+
+
+def second_samples(draws: Sequence[Draw], settings: Settings | None) -> dict[int, Job]:
+    """The re-runs on an independent sample of every draw that failed only statistical tests (module docstring),
+    by the draw's position in `draws`; a scenario without a `SAMPLE_SEED` parameter gets none (its failure stands)."""
+    out = {}
+    for i, d in enumerate(draws):
+        if d.job is None or not _statistical_only(d):
+            continue
+        scenario = d.job.scenario
+        seed = next((p for p in scenario.params if p.name == SAMPLE_SEED), None)
+        if seed is None:
+            continue
+        first = d.params.get(SAMPLE_SEED, scenario.defaults()[SAMPLE_SEED])
+        params = {**d.params, SAMPLE_SEED: float(second_sample_seed(first))}
+        out[i] = check_job(Job(scenario, d.case, params, variant=f"census {d.index} second sample"), settings)
+    return out
+
+
+def settle_second(draws: Sequence[Draw], jobs: Mapping[int, Job], result: RunResult) -> None:
+    """A draw whose second sample passed every check passes (the first sample's failure was chance); otherwise it
+    stays failed, its reason saying the second sample failed too."""
+    for i, job in jobs.items():
+        d = draws[i]
+        rows = result.rows.get(job.key)
+        if rows is None:  # interrupted before it ran
+            continue
+        statuses = {r["status"] for r in rows}
+        passed = statuses <= {PASS, UNRESOLVED}
+        d.second = {
+            "params": dict(job.overrides),
+            "status": PASSED if passed else FAILED,
+            "first_failed": d.reason,
+            "failed": sorted({r["check"] for r in rows if r["status"] not in (PASS, UNRESOLVED)}),
+        }
+        if passed:
+            d.status = PASSED
+        else:
+            d.reason += " (and on an independent second sample: " + ", ".join(d.second["failed"]) + ")"
+
+
+def statistics(draws: Sequence[Draw]) -> tuple[int, int, float]:
+    """Statistical tests run on first samples, how many failed, and how many a correct simulation fails on average
+    (the sum of their levels, ``false_alarm``)."""
+    rows = [r for d in draws for r in d.rows if r.get("claim") == "statistical"]  # first samples' rows
+    failed = sum(1 for r in rows if r["status"] == FAIL)
+    return len(rows), failed, float(sum(r.get("false_alarm", 0.0) for r in rows))
+
+
 # ---- reporting ------------------------------------------------------------------------------------------------
 
 
@@ -356,6 +434,19 @@ def table(draws: Sequence[Draw]) -> str:
     if refusals:
         out += ["", "refused (before simulating), by reason:"]
         out += [f"  {s}: {k} x {reason}" for s, reason, k in refusals]
+    tests, failed, expected = statistics(draws)
+    if tests:
+        out += [
+            "",
+            f"statistical tests: {failed} of {tests} failed on the first sample (a correct simulation fails "
+            f"{expected:.2g} on average); a draw failing only these is re-run on an independent sample:",
+        ]
+        out += [
+            f"  {d.second['status']} on the second sample ({d.second['first_failed']} failed on the first): "
+            f"{d.command()}"
+            for d in draws
+            if d.second is not None
+        ]
     bad = [d for d in draws if d.status in (FAILED, CRASHED)]
     if bad:
         out += ["", "failed and crashed draws (each line reproduces one):"]

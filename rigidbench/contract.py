@@ -210,6 +210,11 @@ class Check:
         a conservation law the engine's equal and opposite forces build in), not the accuracy of an approximation:
         its error is round-off, and a failure means a broken model or engine, not an inaccurate one. Reported as
         ``claim: "identity"`` in result rows, `rigidbench list` and the report, apart from the accuracy checks.
+    false_alarm : float
+        For a statistical test (a Monte Carlo sample's goodness of fit), the probability that a correct simulation
+        fails it: the test's level. Reported as ``claim: "statistical"``; a census re-runs a set that failed only
+        such checks on an independent sample (`rigidbench.census`), since a correct simulation fails one in 1 /
+        false_alarm sets. 0 (the default) for a deterministic check.
     """
 
     name: str
@@ -220,15 +225,19 @@ class Check:
     theory: str
     floor: float = 0.0
     identity: bool = False
+    false_alarm: float = 0.0
 
     @property
     def claim(self) -> str:
-        """``"identity"`` for a check of an exact relation (`identity`), else ``"accuracy"``."""
-        return "identity" if self.identity else "accuracy"
+        """``"identity"`` for a check of an exact relation (`identity`), ``"statistical"`` for a statistical test
+        (`false_alarm`), else ``"accuracy"``."""
+        return "identity" if self.identity else "statistical" if self.false_alarm > 0 else "accuracy"
 
     def __post_init__(self) -> None:
         if self.kind not in ("rel", "abs"):
             raise ValueError(f"check {self.name}: kind must be 'rel' or 'abs', not {self.kind!r}")
+        if not 0 <= self.false_alarm < 1:
+            raise ValueError(f"check {self.name}: false_alarm must be in [0, 1), not {self.false_alarm!r}")
 
     def error(self, measured: float, expected: float) -> float:
         diff = abs(measured - expected)

@@ -440,8 +440,9 @@ def _theory_cell(row: Mapping[str, Any]) -> str:
     ref = row.get("theory_ref") or theory_ref(row.get("theory") or "")
     if not ref:
         return "-"
-    # an identity (exact by symmetry or construction, `Check.identity`) says so beside its ID
-    claim = " <small>identity</small>" if row.get("claim") == "identity" else ""
+    # an identity (exact by symmetry or construction, `Check.identity`) or a statistical test (`Check.false_alarm`)
+    # says so beside its ID
+    claim = f" <small>{row['claim']}</small>" if row.get("claim") in ("identity", "statistical") else ""
     return f'<a href="{html.escape(theory_link(ref))}">{html.escape(ref)}</a>{claim}'
 
 

@@ -80,6 +80,7 @@ def rows_of(run: CaseRun) -> list[dict[str, Any]]:
             # error's floor where it has one (`Check.floor`)
             "claim": o.check.claim,
             **({"tolerance_floor": o.check.floor} if o.check.floor else {}),
+            **({"false_alarm": o.check.false_alarm} if o.check.false_alarm else {}),
             "status": UNRESOLVED if o.unresolved else PASS if o.passed else FAIL,
             "passed": None if o.unresolved else o.passed,
             "diverged_at": None,

@@ -67,7 +67,7 @@ def print_scenario(sc) -> None:
     for ch in sc.checks:
         ref = theory_ref(ch.theory)
         link = f" {theory_link(ref)}" if ref else ""
-        claim = " (identity)" if ch.identity else ""
+        claim = f" ({ch.claim})" if ch.claim != "accuracy" else ""
         print(f"    {ch.name:<24} tol {ch.tolerance:.3g} {ch.kind:<3}{claim}  [{ch.theory}]{link}")
     print()
 
