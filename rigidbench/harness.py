@@ -446,7 +446,10 @@ def run(
     perturb : callable, optional
         Edits a copy of the compiled model in place before it is simulated (`rigidbench.power`): the
         prediction, the controls and the measurement keep the unperturbed model, so a check that fails shows
-        the benchmark can see the edit.
+        the benchmark can see the edit. Where its ``from_params`` attribute is true (a parameter the scenario
+        computes the start state or the controls from: a platform's rate, a cushion's height), the simulated start
+        state and controls are computed from the edited copy instead; the prediction and the measurement still
+        keep the unperturbed model and start.
 
     Raises
     ------
@@ -458,10 +461,16 @@ def run(
     model, data, prediction = prep.model, prep.data, prep.prediction
     control = scenario.control(model, model.opt.timestep, prep.nstep)
     simulated = model
+    engine = settings.engine_object() if settings is not None else None
     if perturb is not None:
         simulated = copy.copy(model)
         perturb(simulated)
-    engine = settings.engine_object() if settings is not None else None
+        if getattr(perturb, "from_params", False):
+            forces.attach(simulated)
+            data = start(scenario, simulated)  # the parameters read back from the edited copy
+            if engine is not None and engine.precision != "float64":
+                data = stored_state(simulated, data, engine.precision)
+            control = scenario.control(simulated, simulated.opt.timestep, prep.nstep)
     with use_engine(engine):  # `rigidbench.simulate` steps with it; scenario code never branches on it
         c0, t0 = _time.process_time(), _time.perf_counter()
         traj = scenario.simulate(simulated, data, prep.duration, control=control)

@@ -15,14 +15,33 @@ power):
 - ``g``: gravity, where it is not zero, or the field a model declares fixed in a body's axes
   (`rigidbench.forces.FrameField`, gravity on a turning platform);
 - ``spring-k``: every joint and tendon stiffness, where there is one;
+- ``joint-damping``: every joint and tendon damping, where there is one;
 - ``inverse-square-k``: every strength of the model's declared inverse-square pairs (`rigidbench.forces`), where it
-  declares one;
+  declares one; named ``coulomb-k`` where every strength is positive (repulsion: Coulomb's q1 q2 / (4 pi eps0));
 - ``friction``: sliding friction of every geom and pair, where contacts are enabled;
 - ``contact-stiffness``: every contact's stiffness (direct solref: k; standard solref: the time constant over
-  sqrt(1 + delta)), where contacts are enabled.
+  sqrt(1 + delta)), where contacts are enabled;
+- ``contact-damping``: every contact's damping (direct solref: b; standard solref: the damping ratio), where
+  contacts are enabled and some contact declares one (zero damping, an elastic contact, is no quantity).
+
+Those are edits of the model alone. Two more kinds of quantity are scenario parameters that MuJoCo never reads: a
+custom numeric (`rigidbench.params.Numeric`) from which the scenario computes the start state or the controls
+(`parameter_quantities`). The simulated copy's numeric is scaled, and its start state and controls are computed from
+it (`rigidbench.harness.run` with a perturbation whose ``from_params`` is true); the prediction and the measurement
+keep the unperturbed model and start. A scalar numeric parameter is one
+
+- ``rate:<body>``: where it sets the initial velocity of the hinge of a turning frame, in proportion (scaled by
+  1 + delta, the hinge's velocity is): a body other moving bodies are carried by, or the frame of a declared field
+  (`rigidbench.forces.FrameField`). A turning platform's rate (foucault, eastward-deflection, gyrocompass); a
+  rotor's or a top's spin, a release angle, a speed are initial conditions of the motion, not quantities;
+- ``load:<param>``: where it changes the controls (the applied loads: a cue's, a stick's or a cushion's impulse,
+  the cushion's height and restitution) and not the start state.
+
+Both are found by what the numeric does (`parameter_quantities`), so no scenario declares them.
 
 A scenario's quantities are those of every case's model (cases may differ, e.g. one force law or another); a case
-whose model lacks a quantity runs unperturbed (it cannot see it).
+whose model lacks a quantity runs unperturbed (it cannot see it). A parameter quantity is scaled in every case whose
+model has its numeric.
 
 Mass and inertia edits are followed by `mujoco.mj_setConst` (MuJoCo 4 caches the joint-space inertia ``dof_M0``;
 without it the edit does nothing).
@@ -35,6 +54,7 @@ is reported as such, not as a weakness.
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -44,6 +64,7 @@ import mujoco
 import numpy as np
 
 from rigidbench import forces, registry
+from rigidbench.params import Numeric
 from rigidbench.results import PASS
 from rigidbench.runner import Job
 from rigidbench.scenario import Scenario
@@ -56,29 +77,50 @@ NEGLIGIBLE_INERTIA = 1e-6
 
 @dataclass(frozen=True)
 class Quantity:
-    """A physical quantity of a compiled model that can be scaled by ``1 + delta``."""
+    """A physical quantity of a compiled model that can be scaled by ``1 + delta``: of the model itself, or the
+    custom numeric `numeric` a scenario computes its start state or controls from (module docstring)."""
 
     name: str
     scale: Callable[[mujoco.MjModel, float], None]
+    numeric: str | None = None
 
     def perturb(self, delta: float) -> Perturbation:
-        return Perturbation(self.name, delta)
+        return Perturbation(self.name, delta, self.numeric)
 
 
 @dataclass(frozen=True)
 class Perturbation:
     """Scale the quantity `name` of a model by ``1 + delta``: a value (picklable, so a job carrying it can run on a
-    cluster), found again in the model it is applied to (`quantities`)."""
+    cluster), found again in the model it is applied to (`quantities`), or, for a parameter quantity, the custom
+    numeric `numeric` (`parameter_quantities`), from which `rigidbench.harness.run` then computes the simulated
+    start state and controls (``from_params``)."""
 
     name: str
     delta: float
+    numeric: str | None = None
+
+    @property
+    def from_params(self) -> bool:
+        """Whether the simulated start state and controls are computed from the perturbed copy (`harness.run`)."""
+        return self.numeric is not None
 
     def __call__(self, model: mujoco.MjModel) -> None:
+        if self.numeric is not None:
+            _scale_numeric(model, self.numeric, self.delta)
+            return
         for q in quantities(model):
             if q.name == self.name:
                 q.scale(model, self.delta)
                 return
         # Another case's quantity (module docstring): this case's model lacks it and runs unperturbed.
+
+
+def _scale_numeric(model: mujoco.MjModel, name: str, delta: float) -> None:
+    """Scale the custom numeric `name` by ``1 + delta``, where the model has it."""
+    i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, name)
+    if i >= 0:
+        adr, size = model.numeric_adr[i], model.numeric_size[i]
+        model.numeric_data[adr : adr + size] *= 1 + delta
 
 
 def _moving_bodies(model: mujoco.MjModel) -> list[int]:
@@ -125,7 +167,15 @@ def quantities(model: mujoco.MjModel) -> list[Quantity]:
             m.tendon_stiffness[:] = m.tendon_stiffness * (1 + delta)
 
         out.append(Quantity("spring-k", spring))
-    if forces.inverse_square(model) is not None:
+    if np.any(model.dof_damping > 0) or np.any(model.tendon_damping > 0):
+
+        def damping(m: mujoco.MjModel, delta: float) -> None:
+            m.dof_damping[:] = m.dof_damping * (1 + delta)
+            m.tendon_damping[:] = m.tendon_damping * (1 + delta)
+
+        out.append(Quantity("joint-damping", damping))
+    law = forces.inverse_square(model)
+    if law is not None:
 
         def inverse_square(m: mujoco.MjModel, delta: float) -> None:
             i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, forces.INVERSE_SQUARE)
@@ -133,7 +183,7 @@ def quantities(model: mujoco.MjModel) -> list[Quantity]:
                 adr, size = m.numeric_adr[i], m.numeric_size[i]
                 m.numeric_data[adr : adr + size] *= 1 + delta
 
-        out.append(Quantity("inverse-square-k", inverse_square))
+        out.append(Quantity("coulomb-k" if np.all(law.k > 0) else "inverse-square-k", inverse_square))
     contact = not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
     collidable = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
     if contact and (collidable.any() or model.npair):
@@ -152,7 +202,93 @@ def quantities(model: mujoco.MjModel) -> list[Quantity]:
                 solref[~direct, 0] /= math.sqrt(1 + delta)  # k ~ 1 / timeconst^2
 
         out.append(Quantity("contact-stiffness", stiffness))
+        if np.any(model.geom_solref[collidable, 1] != 0) or np.any(model.pair_solref[:, 1] != 0):
+
+            def contact_damping(m: mujoco.MjModel, delta: float) -> None:
+                for solref in (m.geom_solref, m.pair_solref):
+                    solref[:, 1] *= 1 + delta  # direct: -b; standard: the damping ratio
+
+            out.append(Quantity("contact-damping", contact_damping))
     return out
+
+
+PROBE = 1e-3  # the relative change of a numeric that tells what it sets (`parameter_quantities`)
+
+
+def parameter_quantities(scenario: Scenario, model: mujoco.MjModel, nstep: int) -> list[Quantity]:
+    """The scenario's scalar numeric parameters that are physical quantities of `model` (module docstring): each
+    scaled by 1 + `PROBE` in a copy, the start state and the controls (of a run of `nstep` steps) computed from the
+    copy tell a turning frame's rate (``rate:<body>``) and an applied load (``load:<param>``) from an initial
+    condition."""
+    out: list[Quantity] = []
+    base = _started(scenario, model, nstep)
+    if base is None:
+        return out
+    data0, control0 = base
+    for p in scenario.params:
+        if not isinstance(p.target, Numeric):
+            continue
+        i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, p.target.name)
+        if i < 0 or model.numeric_size[i] != 1 or model.numeric_data[model.numeric_adr[i]] == 0:
+            continue
+        probe = copy.copy(model)
+        _scale_numeric(probe, p.target.name, PROBE)
+        moved = _started(scenario, probe, nstep)
+        if moved is None:
+            continue
+        data1, control1 = moved
+        same_start = np.array_equal(data0.qpos, data1.qpos) and np.array_equal(data0.qvel, data1.qvel)
+        same_control = (control0 is None and control1 is None) or (
+            control0 is not None and control1 is not None and np.array_equal(control0, control1)
+        )
+        name = None
+        if same_start and not same_control:
+            name = f"load:{p.name}"
+        elif not same_start:
+            frame = _turned_frame(model, data0.qvel, data1.qvel)
+            if frame is not None:
+                name = f"rate:{frame}"
+        if name is not None:
+            out.append(Quantity(name, lambda m, delta, n=p.target.name: _scale_numeric(m, n, delta), p.target.name))
+    return out
+
+
+def _started(scenario: Scenario, model: mujoco.MjModel, nstep: int) -> tuple[mujoco.MjData, np.ndarray | None] | None:
+    """The start state and the controls of a run of `nstep` steps the scenario computes from `model` (None where it
+    refuses the model's numbers)."""
+    try:
+        data = scenario.start(model)
+        control = scenario.control(model, model.opt.timestep, nstep)
+    except Exception:  # noqa: BLE001 - numbers the scenario refuses set nothing a run could use
+        return None
+    return data, (None if control is None else np.array(control, dtype=float))
+
+
+def _turned_frame(model: mujoco.MjModel, qvel0: np.ndarray, qvel1: np.ndarray) -> str | None:
+    """The name of the turning frame whose hinge velocity went from `qvel0` to ``(1 + PROBE) qvel0`` in `qvel1`
+    (module docstring), or None."""
+    law = forces.frame_field(model)
+    for j in range(model.njnt):
+        if model.jnt_type[j] != mujoco.mjtJoint.mjJNT_HINGE:
+            continue
+        dof, body = model.jnt_dofadr[j], model.jnt_bodyid[j]
+        v0, v1 = float(qvel0[dof]), float(qvel1[dof])
+        if v0 == 0 or not math.isclose(v1, v0 * (1 + PROBE), rel_tol=1e-9):
+            continue
+        carries = any(
+            model.body_dofnum[b] > 0 and _descends(model, b, body) for b in range(1, model.nbody) if b != body
+        )
+        if carries or (law is not None and law.frame == body):
+            return model.body(body).name or f"body{body}"
+    return None
+
+
+def _descends(model: mujoco.MjModel, b: int, ancestor: int) -> bool:
+    while b > 0:
+        b = int(model.body_parentid[b])
+        if b == ancestor:
+            return True
+    return False
 
 
 @dataclass
@@ -189,9 +325,13 @@ def theory_sensitivity(scenario: Scenario, quantity: Quantity, settings: Setting
             perturbed = _copy(model)
             # By name in this case's own model (its bodies may differ from the model the quantity was listed from;
             # a case whose model lacks it is left unperturbed, as in `Perturbation`).
-            Perturbation(quantity.name, delta)(perturbed)
+            perturbation = quantity.perturb(delta)
+            perturbation(perturbed)
+            # A parameter quantity: the prediction from the perturbed parameters and the start they give; a model
+            # quantity: from the perturbed model and the case's own parameters.
+            params = None if perturbation.from_params else prep.params
             try:
-                other = scenario.predict(perturbed, scenario.start(perturbed, prep.params))
+                other = scenario.predict(perturbed, scenario.start(perturbed, params))
             except Exception:  # noqa: BLE001 - a prediction the perturbation makes undefined moved, by definition
                 moved = True
                 break
@@ -210,8 +350,6 @@ def theory_sensitivity(scenario: Scenario, quantity: Quantity, settings: Setting
 
 
 def _copy(model: mujoco.MjModel) -> mujoco.MjModel:
-    import copy
-
     return copy.copy(model)
 
 
@@ -228,7 +366,8 @@ def plan(targets: Sequence[str], settings: Settings | None) -> list[tuple[Scenar
         scenario, _ = registry.parse_target(target)
         found: dict[str, Quantity] = {}
         for case in scenario.cases:  # every case's quantities, in the order they first appear
-            for q in quantities(scenario.prepare(case.name, None, settings).model):
+            prep = scenario.prepare(case.name, None, settings)
+            for q in quantities(prep.model) + parameter_quantities(scenario, prep.model, prep.nstep):
                 found.setdefault(q.name, q)
         pairs += [(scenario, q) for q in found.values()]
     return pairs

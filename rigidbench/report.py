@@ -306,7 +306,8 @@ def _power_section(doc: Mapping[str, Any]) -> list[str]:
         )
     intro = (
         "Each quantity of the simulated model was scaled by 1 + delta while the prediction and the measurement kept "
-        "the unperturbed model; <i>detected at</i> is the smallest delta (1e-2 .. 1e-8, by decades) at which some "
+        "the unperturbed model (a rate: or load: quantity is a parameter the simulated start state or controls "
+        "were computed from); <i>detected at</i> is the smallest delta (1e-2 .. 1e-8, by decades) at which some "
         "check failed; <i>theory moves at</i> is the delta at which the prediction itself moves by a tolerance."
     )
     complete = "" if doc.get("complete", True) else " (interrupted: incomplete)"

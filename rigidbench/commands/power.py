@@ -16,8 +16,10 @@ def arguments(sub) -> None:
         "power",
         help="the benchmark's detection limit: smallest perturbation of a simulated quantity that fails a check",
         description="For every physical quantity of each scenario's model (body masses and inertias, g, spring "
-        "constants, friction, contact stiffness), simulate a copy scaled by 1 + delta against the prediction of "
-        "the unperturbed model, for delta = 1e-2, 1e-3, ... 1e-8 (stopping at the first delta no check catches), "
+        "constants and damping, the inverse-square strength, friction, contact stiffness and damping, a turning "
+        "platform's rate, an applied load), simulate a copy scaled by 1 + delta against the prediction of "
+        "the unperturbed model (a rate or a load: the simulated start state or controls computed from it), for "
+        "delta = 1e-2, 1e-3, ... 1e-8 (stopping at the first delta no check catches), "
         "and print the smallest delta detected, the checks that caught it, and the delta at which the theory "
         "itself moves by a tolerance. Exit 0 (the table is the result).",
     )
