@@ -12,6 +12,8 @@ power):
 
 - ``mass:<body>``, ``inertia:<body>``: every body with degrees of freedom (the first `MAX_BODIES` of them);
   inertia is skipped where it is below 1e-6 of the body's joint-space inertia (a point bob's 1e-9 kg m^2);
+- ``length:<body>``: a body turning about one hinge or ball joint, its centre of mass off the joint (a pendulum's
+  rod, a top's arm): the centre of mass's distance from the joint (`mj_setConst` after it, as for mass);
 - ``g``: gravity, where it is not zero, or the field a model declares fixed in a body's axes
   (`rigidbench.forces.FrameField`, gravity on a turning platform);
 - ``spring-k``: every joint and tendon stiffness, where there is one;
@@ -127,6 +129,18 @@ def _moving_bodies(model: mujoco.MjModel) -> list[int]:
     return [b for b in range(1, model.nbody) if model.body_dofnum[b] > 0 and model.body_mass[b] > 0][:MAX_BODIES]
 
 
+def _arm(model: mujoco.MjModel, b: int) -> np.ndarray | None:
+    """For a body turning about one hinge or ball joint whose centre of mass lies off the joint: the joint's
+    position in the body's frame (the anchor `length:<body>` scales the centre of mass's offset from); else None."""
+    if model.body_jntnum[b] != 1:
+        return None
+    j = model.body_jntadr[b]
+    if int(model.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_BALL)):
+        return None
+    anchor = np.array(model.jnt_pos[j])
+    return anchor if np.linalg.norm(model.body_ipos[b] - anchor) > 0 else None
+
+
 def quantities(model: mujoco.MjModel) -> list[Quantity]:
     """The quantities of `model` a power run perturbs (module docstring)."""
     out: list[Quantity] = []
@@ -146,6 +160,14 @@ def quantities(model: mujoco.MjModel) -> list[Quantity]:
                 mujoco.mj_setConst(m, mujoco.MjData(m))
 
             out.append(Quantity(f"inertia:{name}", inertia))
+        arm = _arm(model, b)
+        if arm is not None:
+
+            def length(m: mujoco.MjModel, delta: float, b: int = b, anchor: np.ndarray = arm) -> None:
+                m.body_ipos[b] = anchor + (m.body_ipos[b] - anchor) * (1 + delta)
+                mujoco.mj_setConst(m, mujoco.MjData(m))
+
+            out.append(Quantity(f"length:{name}", length))
     if np.any(model.opt.gravity != 0):
 
         def gravity(m: mujoco.MjModel, delta: float) -> None:

@@ -118,3 +118,25 @@ def test_joint_damping_is_a_quantity_where_a_joint_declares_one():
     assert "joint-damping" not in {q.name for q in power.quantities(mujoco.MjModel.from_xml_string(xml.format(d=0)))}
     power.Perturbation("joint-damping", 1e-3)(damped)
     assert damped.dof_damping[0] == pytest.approx(0.3 * 1.001, rel=1e-15)
+
+
+def test_a_pendulum_has_a_length_row_and_its_perturbation_moves_the_period():
+    """length:<body> scales the centre of mass's distance from its joint (a pendulum's rod): the simulated period
+    moves by half the relative change (T ~ sqrt(l)) while the prediction keeps the unperturbed model."""
+    scenario = registry.get("pendulum")
+    case = scenario.cases[0]
+    model = scenario.prepare(case.name).model
+    names = [q.name for q in power.quantities(model)]
+    assert "length:pendulum" in names
+    base = {o.check.name: o for o in scenario.run(case.name).outcomes}
+    moved = {
+        o.check.name: o for o in scenario.run(case.name, perturb=power.Perturbation("length:pendulum", 1e-4)).outcomes
+    }
+    check = next(n for n in base if "period" in n)
+    assert moved[check].expected == base[check].expected
+    assert moved[check].measured / base[check].measured - 1 == pytest.approx(0.5e-4, rel=1e-2)
+    assert "length:top" in [q.name for q in power.quantities(registry.get("heavy-top").prepare("nutation").model)]
+    assert not any(
+        n.startswith("length:")
+        for n in [q.name for q in power.quantities(registry.get("free-symmetric-top").prepare().model)]
+    )
