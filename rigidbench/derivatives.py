@@ -1,0 +1,445 @@
+"""Derivatives under the same theory (issue 37): MuJoCo's Jacobians scored against the linearised closed forms.
+
+For each smooth scenario (pendulum, coupled pendulums, pendulum chain, double pendulum) and each of its cases, one
+`rigidbench.harness.CaseRun` whose rows have the format of ``rigidbench run`` (`rigidbench.results.rows_of`):
+
+- ``transition-map``: the one-step Jacobian ``d x_{k+1} / d x_k`` at the lower equilibrium (state ``x = (q, v)``),
+  from ``mujoco.mjd_transitionFD`` (centred, `EPS`) for the Euler family and ``discrete``, and from centred
+  differences of ``mj_step`` for RK4 (``mjd_transitionFD`` refuses RK4), against the integrator's own map of
+  ``T q'' + V q = 0`` (`rigidbench.analytic.linearised.transition_map`), T and V built from the parameters read
+  back from the compiled model. The error is ``|A - A_theory|_F / |A_theory - 1|_F``: relative to what the step
+  changes (the map is the identity plus O(h)), so a 1e-6 error in a force constant moves it by ~1e-6.
+- ``transition-map-at-start`` (pendulum): the same at the case's release state (amplitude a, at rest), against
+  the exact Jacobian of the integrator's map of the nonlinear pendulum (``omega0^2 cos a``).
+- ``map-omega`` / ``map-omega-slowest`` / ``map-omega-fastest``: the angle per step of the map's eigenvalues over
+  h, against O1-O7's frequencies carried through the integrator's map (`linearised.map_frequency`).
+- ``map-mode-shapes``: the eigenvectors' angle parts (scaled to their largest entry) against O3-O7's shapes.
+- ``inverse-omega*`` and ``inverse-mass``: normal-mode frequencies from ``mjd_inverseFD``'s stiffness ``df/dq``
+  and mass ``df/da`` (generalised eigenproblem; no integrator in it), and ``df/da`` against T.
+- ``period-amplitude-slope`` (pendulum): dT/da by centred differences of the scenario's own period measurement
+  over two rollouts at a +- `AMPLITUDE_STEP`, against the elliptic-integral derivative
+  (`linearised.period_amplitude_slope`).
+
+``perturb`` edits a copy of the compiled model that is differentiated and simulated, while the theory keeps the
+unperturbed one (as `rigidbench.power` does): tests/test_derivatives.py shows each check catching a 1e-6 error.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from rigidbench import registry
+from rigidbench.analytic import linearised as lin
+from rigidbench.analytic import oscillations as osc
+from rigidbench.envs import pendulums
+from rigidbench.harness import CaseRun, Outcome, settings_record
+from rigidbench.scenario import Check, Scenario
+from rigidbench.settings import INTEGRATORS, Settings
+
+EPS = 1e-6  # finite-difference step of the state (rad, rad/s) and of mjd_inverseFD
+AMPLITUDE_STEP = 1e-2  # rad: the centred difference of the period over two rollouts
+SCENARIOS = ("pendulum", "coupled-pendulums", "pendulum-chain", "double-pendulum")
+# The cases whose period slope is resolved (`_slope_floor`): a slope a/8 T0 that the rollouts' period error does not
+# swamp; near upright the period's fourth derivative makes the centred difference's truncation large.
+SLOPE_CASES = ("one-radian", "large-amplitude")
+
+_FD = (
+    f"centred differences of step {EPS:g}: truncation eps^2 |f'''| / 6 ~ 1e-12 (the map is linear at the "
+    f"equilibrium to O(eps^2)), round-off u |x_(k+1)| / eps ~ 2.2e-16 x 1 m / {EPS:g} = 2.2e-10 of each column"
+)
+
+CHECKS: dict[str, Check] = {
+    c.name: c
+    for c in (
+        Check(
+            "transition-map",
+            "1",
+            1e-8,
+            "abs",
+            f"{_FD}; measured 2e-11..6e-10 over the four scenarios and five integrators; 1e-8 keeps a factor 15 "
+            "above the worst and 100 below a 1e-6 error of a force constant",
+            "O7: x_(k+1) = A x_k, A the integrator's map of T q'' + V q = 0 (analytic/linearised.py)",
+        ),
+        Check(
+            "transition-map-at-start",
+            "1",
+            1e-8,
+            "abs",
+            f"{_FD}; plus, at the release state, the rounding of the new state, u |q| per evaluation: the row adds "
+            "4 u max(|q|, |v| h) / (eps |A - 1|_F) (1.4e-7 at 2.5 rad, where 3.1e-8 is measured)",
+            "O1: the integrator's map of q'' = -omega0^2 sin q, Jacobian with omega0^2 cos a (analytic/linearised.py)",
+        ),
+        Check(
+            "map-omega",
+            "rad/s",
+            1e-8,
+            "rel",
+            "the eigenvalues of the map carry the centred differences' error (transition-map, <= 1e-9 of the "
+            "step's change) into the angle per step; measured <= 1e-10",
+            "O1/O3/O5/O7: omega of the linearised theory through the integrator's map, theta = 2 asin(omega h/2) "
+            "(Euler family), arg R(i omega h) (RK4)",
+        ),
+        Check(
+            "map-mode-shapes",
+            "1",
+            1e-6,
+            "abs",
+            "an eigenvector moves by (error of the map) / (relative gap of its eigenvalues); the gaps here are >= "
+            "1e-3 of the frequency (weak coupling) and the map's error <= 1e-9: <= 1e-6",
+            "O3/O5/O7: mode shapes a_r of det(V - omega^2 T) = 0 (joint coordinates)",
+        ),
+        Check(
+            "inverse-omega",
+            "rad/s",
+            1e-8,
+            "rel",
+            f"mjd_inverseFD's centred differences of step {EPS:g}: round-off u g l / eps ~ 2e-9 of the stiffness, "
+            "half of it in omega; measured <= 5e-10",
+            "O1/O3/O5/O7: omega^2 = eigenvalues of V against T, V = df/dq, T = df/da (no integrator)",
+        ),
+        Check(
+            "inverse-mass",
+            "1",
+            1e-9,
+            "abs",
+            "df/da of inverse dynamics is linear in qacc: centred differences are exact up to round-off u |M| / eps "
+            "~ 2e-10 (measured <= 1e-11); |df/da - T|_F / |T|_F",
+            "O7: T, the kinetic-energy matrix (I_cm + m l^2 ... in joint coordinates); `discrete`: M + h D, D = 0 "
+            "without dampers",
+        ),
+        Check(
+            "period-amplitude-slope",
+            "s/rad",
+            1e-5,
+            "rel",
+            f"centred difference over a +- {AMPLITUDE_STEP:g} rad: truncation (da^2/6) T''' / T' computed from O1 "
+            "(the row's tolerance adds it), plus the rollouts' period error, which is smooth in a and cancels to "
+            "its derivative: RK4's (omega h)^4/120 ~ 1e-11; Euler family's (omega h)^2/24 ~ 1.6e-6 of T, whose "
+            "a-derivative is of that order relative to dT/da",
+            "O1: dT/da = 4 sqrt(l/g) dK/dm sin(a)/2, dK/dm = (E - (1 - m) K) / (2 m (1 - m)), m = sin^2(a/2)",
+        ),
+    )
+}
+
+
+def _named(base: str, n: int) -> list[str]:
+    """Row names of per-mode checks: ``base`` for one mode, ``base-slowest`` and ``base-fastest`` for more."""
+    return [base] if n == 1 else [f"{base}-slowest", f"{base}-fastest"]
+
+
+def _check(name: str, **replace: Any) -> Check:
+    base = CHECKS[name.removesuffix("-slowest").removesuffix("-fastest")]
+    return dataclasses.replace(base, name=name, **replace)
+
+
+# ---- the theory, from the compiled model ------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Theory:
+    """The linearised theory of a compiled model in MuJoCo's joint coordinates q (``absolute = S q``).
+
+    Attributes
+    ----------
+    inertia, stiffness, springs : ndarray, shape (n, n)
+        T, V and the springs' share V_s of V (joint coordinates).
+    omegas : ndarray, shape (n,)
+        Closed-form mode frequencies (rad/s), ascending (O1, O3, O5 or O7).
+    shapes : ndarray, shape (n, n)
+        Column r: mode r's shape in joint coordinates, scaled to its largest entry.
+    spring_share : ndarray, shape (n,)
+        Each mode's omega_s^2 = a_r^T V_s a_r (a_r normalised a^T T a = 1).
+    theory : str
+        The IDs behind it.
+    """
+
+    inertia: np.ndarray
+    stiffness: np.ndarray
+    springs: np.ndarray
+    omegas: np.ndarray
+    shapes: np.ndarray
+    spring_share: np.ndarray
+    theory: str
+
+
+def absolute_map(model: mujoco.MjModel) -> np.ndarray:
+    """S with absolute rod angles = S q: a hinge turns its body and every body below it (planar chains, one axis)."""
+    n = model.njnt
+    S = np.zeros((n, n))
+    for i in range(n):
+        body = model.jnt_bodyid[i]
+        for j in range(n):
+            b = body
+            while b > 0:
+                if b == model.jnt_bodyid[j]:
+                    S[i, j] = 1.0
+                    break
+                b = model.body_parentid[b]
+    return S
+
+
+def theory(slug: str, model: mujoco.MjModel) -> Theory:
+    """The linearised theory of scenario `slug`'s compiled `model` (parameters read back from it)."""
+    pend = pendulums.pendulums(model)
+    g = pendulums.gravity(model)
+    n = len(pend)
+    Vs_abs = np.zeros((n, n))
+    if slug == "double-pendulum":
+        p1, p2 = pend
+        T_abs, V_abs = osc.double_pendulum_matrices(
+            p1.mass, p2.mass, p1.length, p2.length, g, p1.inertia_cm, p2.inertia_cm
+        )
+        modes, ids = osc.normal_modes(T_abs, V_abs), "O6/O7"
+    else:
+        p = pend[0]
+        mgl = p.mass * g * p.length
+        if slug == "pendulum":
+            T_abs, V_abs = np.array([[p.inertia_pivot]]), np.array([[mgl]])
+            modes, ids = osc.normal_modes(T_abs, V_abs), "O1/O2 (small amplitude)"
+        else:
+            sp = pendulums.springs(model)
+            k = float(sp.stiffness[0])
+            T_abs, V_abs = osc.spring_chain_matrices(n, p.inertia_pivot, mgl, k, sp.height)
+            Vs_abs = osc.spring_chain_matrices(n, p.inertia_pivot, 0.0, k, sp.height)[1]
+            if slug == "coupled-pendulums":
+                modes, ids = osc.coupled_modes(p.inertia_pivot, mgl, k, sp.height), "O3"
+            else:
+                modes, ids = osc.chain_modes(n, p.inertia_pivot, mgl, k, sp.height), "O5"
+    S = absolute_map(model)
+    shapes = np.linalg.solve(S, modes.shapes)
+    share = np.einsum("ir,ij,jr->r", modes.shapes, Vs_abs, modes.shapes)
+    return Theory(
+        inertia=S.T @ T_abs @ S,
+        stiffness=S.T @ V_abs @ S,
+        springs=S.T @ Vs_abs @ S,
+        omegas=np.asarray(modes.frequencies, dtype=float),
+        shapes=shapes / shapes[_reference_rows(shapes), np.arange(n)],
+        spring_share=share,
+        theory=ids,
+    )
+
+
+def _largest(vectors: np.ndarray) -> np.ndarray:
+    """Each column's entry of largest magnitude (a column divided by it is real and has largest entry 1)."""
+    idx = np.argmax(np.abs(vectors), axis=0)
+    return vectors[idx, np.arange(vectors.shape[1])]
+
+
+# ---- what MuJoCo gives --------------------------------------------------------------------------------------------
+
+
+def transition(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    """``d x_{k+1} / d x_k`` (2 nv x 2 nv) at `data`'s state: ``mjd_transitionFD`` (centred), or for RK4, which it
+    refuses, centred differences of ``mj_step`` in the same tangent coordinates (qpos through mj_integratePos)."""
+    nv = model.nv
+    if model.opt.integrator != mujoco.mjtIntegrator.mjINT_RK4:
+        A = np.zeros((2 * nv + model.na, 2 * nv + model.na))
+        mujoco.mjd_transitionFD(model, data, EPS, True, A, None, None, None)
+        return A[: 2 * nv, : 2 * nv]
+    qpos0, qvel0 = data.qpos.copy(), data.qvel.copy()
+    work = mujoco.MjData(model)
+
+    def step(dx: np.ndarray) -> np.ndarray:
+        mujoco.mj_resetData(model, work)
+        work.qpos[:] = qpos0
+        mujoco.mj_integratePos(model, work.qpos, dx[:nv].copy(), 1.0)
+        work.qvel[:] = qvel0 + dx[nv:]
+        mujoco.mj_step(model, work)
+        out = np.empty(2 * nv)
+        mujoco.mj_differentiatePos(model, out[:nv], 1.0, qpos0, work.qpos)
+        out[nv:] = work.qvel
+        return out
+
+    A = np.empty((2 * nv, 2 * nv))
+    for i in range(2 * nv):
+        dx = np.zeros(2 * nv)
+        dx[i] = EPS
+        A[:, i] = (step(dx) - step(-dx)) / (2 * EPS)
+    return A
+
+
+def inverse(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
+    """``(df/dq, df/da)`` of inverse dynamics (``mjd_inverseFD``, centred) at `data`'s state. It refuses RK4; inverse
+    dynamics do not depend on the integrator (``discrete`` aside: df/da = M + h D), so RK4 is evaluated with Euler."""
+    nv = model.nv
+    if model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4:
+        model = copy.copy(model)
+        model.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    DfDq, DfDa = np.zeros((nv, nv)), np.zeros((nv, nv))
+    mujoco.mjd_inverseFD(model, data, EPS, True, DfDq, None, DfDa, None, None, None, None)
+    return DfDq, DfDa
+
+
+def map_modes(A: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """(theta / h ascending, shapes) of a map's oscillating eigenvalues ``|lambda| e^(+-i theta)``: one of each
+    conjugate pair (theta > 0); shapes are the q parts of the eigenvectors, each scaled to its largest entry (real:
+    an undamped mode's q part is a real vector times a phase)."""
+    n = len(A) // 2
+    lam, vec = np.linalg.eig(A)
+    keep = np.flatnonzero(np.angle(lam) > 0)
+    order = keep[np.argsort(np.angle(lam[keep]))]
+    shapes = vec[:n, order]
+    return np.angle(lam[order]) / h, (shapes / _largest(shapes)).real
+
+
+def _reference_rows(shapes: np.ndarray) -> np.ndarray:
+    """Per column, the first row whose magnitude is within 1e-6 of the largest: the entry both the theory's and the
+    map's shapes are scaled to (a symmetric mode has two largest entries of either sign)."""
+    big = np.abs(shapes) >= (1 - 1e-6) * np.abs(shapes).max(axis=0)
+    return np.argmax(big, axis=0)
+
+
+def _equilibrium(model: mujoco.MjModel) -> mujoco.MjData:
+    data = mujoco.MjData(model)
+    data.qpos[:] = model.qpos0
+    mujoco.mj_forward(model, data)
+    return data
+
+
+def _shape_error(measured: np.ndarray, expected: np.ndarray) -> float:
+    return float(np.max(np.abs(measured - expected))) if measured.shape == expected.shape else math.inf
+
+
+# ---- a case -------------------------------------------------------------------------------------------------------
+
+
+def run_case(
+    scenario: Scenario,
+    case: str | None = None,
+    overrides: Mapping[str, object] | None = None,
+    settings: Settings | None = None,
+    *,
+    perturb: Callable[[mujoco.MjModel], None] | None = None,
+) -> CaseRun:
+    """Differentiate one case and score every derivative check (module docstring): a `CaseRun` for
+    `rigidbench.results.rows_of`. `perturb` edits a copy of the compiled model, the theory keeps the original."""
+    t0 = time.perf_counter()
+    prep = scenario.prepare(case, overrides, settings)
+    model = prep.model
+    integrator = _integrator(model)
+    simulated = model
+    if perturb is not None:
+        simulated = copy.copy(model)
+        perturb(simulated)
+    h = float(model.opt.timestep)
+    th = theory(scenario.slug, model)
+    n = len(th.omegas)
+    outcomes: list[Outcome] = []
+
+    A = transition(simulated, _equilibrium(simulated))
+    A_th = lin.transition_map(integrator, th.inertia, th.stiffness, h, th.springs)
+    change = np.linalg.norm(A_th - np.eye(len(A_th)))
+    outcomes.append(Outcome(CHECKS["transition-map"], float(np.linalg.norm(A - A_th) / change), 0.0))
+
+    if scenario.slug == "pendulum":
+        start = mujoco.MjData(simulated)
+        start.qpos[:], start.qvel[:] = prep.data.qpos, prep.data.qvel
+        mujoco.mj_forward(simulated, start)
+        omega0_sq = float(th.stiffness[0, 0] / th.inertia[0, 0])
+        P = lin.pendulum_transition(integrator, omega0_sq, float(start.qpos[0]), float(start.qvel[0]), h)
+        change = np.linalg.norm(P - np.eye(2))
+        err = np.linalg.norm(transition(simulated, start) - P) / change
+        check = CHECKS["transition-map-at-start"]
+        size = max(abs(float(start.qpos[0])), abs(float(start.qvel[0])) * h)
+        floor = 4 * np.finfo(float).eps * size / (EPS * change)  # the new state's rounding, over the step's change
+        outcomes.append(Outcome(dataclasses.replace(check, tolerance=check.tolerance + floor), float(err), 0.0))
+
+    theta, shapes = map_modes(A, h)
+    shapes = shapes / shapes[_reference_rows(th.shapes), np.arange(shapes.shape[1])] if len(theta) == n else shapes
+    expected = lin.map_frequency(integrator, th.omegas, h, th.spring_share)
+    measured = theta if len(theta) == n else np.full(n, math.nan)
+    for name, i in zip(_named("map-omega", n), (0, -1), strict=False):
+        outcomes.append(Outcome(_check(name), float(measured[i]), float(expected[i])))
+    if n > 1:
+        outcomes.append(Outcome(CHECKS["map-mode-shapes"], _shape_error(shapes, th.shapes), 0.0))
+
+    DfDq, DfDa = inverse(simulated, _equilibrium(simulated))
+    w2 = np.sort(np.linalg.eigvals(np.linalg.solve(DfDa, DfDq)).real)
+    omegas = np.sqrt(np.clip(w2, 0.0, None))
+    for name, i in zip(_named("inverse-omega", n), (0, -1), strict=False):
+        outcomes.append(Outcome(_check(name), float(omegas[i]), float(th.omegas[i])))
+    mass_err = np.linalg.norm(DfDa - th.inertia) / np.linalg.norm(th.inertia)
+    outcomes.append(Outcome(CHECKS["inverse-mass"], float(mass_err), 0.0))
+
+    if scenario.slug == "pendulum" and prep.case.name in SLOPE_CASES:
+        outcomes.append(_slope(scenario, prep, overrides, settings, perturb, integrator))
+
+    return CaseRun(
+        scenario=scenario.slug,
+        case=prep.case.name,
+        params=prep.params,
+        settings=settings_record(model, settings),
+        outcomes=outcomes,
+        diverged_at=None,
+        duration=h,
+        nstep=1,
+        wall_time=time.perf_counter() - t0,
+    )
+
+
+def _integrator(model: mujoco.MjModel) -> str:
+    """The MJCF name of the model's integrator (`rigidbench.settings.INTEGRATORS`)."""
+    return next(name for name, value in INTEGRATORS.items() if value == model.opt.integrator)
+
+
+def _slope(
+    scenario: Scenario,
+    prep: Any,
+    overrides: Mapping[str, object] | None,
+    settings: Settings | None,
+    perturb: Callable[[mujoco.MjModel], None] | None,
+    integrator: str,
+) -> Outcome:
+    """dT/da from the scenario's own period measurement at a +- da, against O1's centred difference over the same
+    +- da: the same quotient, so no truncation lies between them (it differs from the exact dT/da,
+    `linearised.period_amplitude_slope`, by (da^2 / 6) T''' / T', 1e-5 at 1 rad). Under RK4 the rollouts' period
+    errors, (omega h)^4 / 120 ~ 1e-11 of T and smooth in a, cancel to their derivative; under the Euler family they
+    do not to a known order, and their difference is bounded by their sum (added to the tolerance)."""
+    from rigidbench.analytic.pendulum import pendulum_period
+
+    a = float(prep.params["amplitude"])
+    length, g = float(prep.prediction["_length_eq"]), float(prep.prediction["_g"])
+    da = AMPLITUDE_STEP
+    measured_periods, errors = [], []
+    for sign in (1, -1):
+        values = {**(overrides or {}), "amplitude": a + sign * da}
+        run = scenario.run(prep.case.name, values, settings, perturb=perturb)
+        period = next(o for o in run.outcomes if o.check.name == "period")
+        measured_periods.append(period.measured)
+        errors.append(abs(period.measured - period.expected))
+    measured = (measured_periods[0] - measured_periods[1]) / (2 * da)
+    expected = (pendulum_period(length, g, a + da) - pendulum_period(length, g, a - da)) / (2 * da)
+    check = CHECKS["period-amplitude-slope"]
+    if integrator != "RK4":
+        bound = (errors[0] + errors[1]) / (2 * da * abs(expected))
+        check = dataclasses.replace(check, tolerance=check.tolerance + bound)
+    return Outcome(check, float(measured), float(expected))
+
+
+# ---- planning -----------------------------------------------------------------------------------------------------
+
+
+def plan(targets: Sequence[str]) -> list[tuple[Scenario, str]]:
+    """(scenario, case) pairs of `targets` (``scenario`` or ``scenario:case``; default: every smooth scenario).
+
+    Raises
+    ------
+    ValueError
+        For an unknown scenario or case, or one without derivative checks.
+    """
+    pairs = []
+    for target in targets or SCENARIOS:
+        scenario, cases = registry.parse_target(target)
+        if scenario.slug not in SCENARIOS:
+            raise ValueError(f"no derivative checks for scenario '{scenario.slug}' (have: {', '.join(SCENARIOS)})")
+        pairs += [(scenario, c) for c in cases]
+    return pairs
