@@ -27,6 +27,14 @@ def arguments(sub) -> None:
     p.add_argument("--junit", metavar="PATH", help="write the results as JUnit XML")
     shared.quiet_argument(p)
     p.add_argument("--brief", action="store_true", help="print only the rows that did not pass and the summary line")
+    p.add_argument(
+        "--census",
+        type=shared.positive_int,
+        metavar="N",
+        help="instead of the cases: N random valid parameter sets per scenario, drawn as `rigidbench census` draws "
+        "them; prints the tally (drawn, refused, passed, failed, crashed); exit 1 unless 0 failed and 0 crashed",
+    )
+    p.add_argument("--seed", type=shared.nonnegative_int, default=1, help="the census's seed (default: 1)")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -45,6 +53,8 @@ def main(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     t0 = time.perf_counter()
+    if args.census:
+        return _census(args, settings, t0)
     rows: list[dict] = []
     for scenario, case in pairs:
         if not args.quiet:
@@ -68,3 +78,21 @@ def main(args: argparse.Namespace) -> int:
         )
     write(args, rows, results.Completion(len(pairs)))
     return EXIT_OK if rows and all(r["status"] == results.PASS for r in rows) else EXIT_FAIL
+
+
+def _census(args: argparse.Namespace, settings, t0: float) -> int:
+    from rigidbench import census, derivatives, outputs
+
+    try:
+        draws = derivatives.census(args.targets, n=args.census, seed=args.seed, settings=settings)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    out = shared.human(args.json)
+    # each failing draw's line reproduces it with this verb, not `run`
+    print(census.table(draws).replace("rigidbench run ", "rigidbench derivatives "), file=out)
+    print(f"\nderivative checks, seed {args.seed}; {time.perf_counter() - t0:.1f} s", file=out)
+    if args.json:
+        doc = census.document(draws, n=args.census, seed=args.seed, profile=args.profile, complete=True)
+        doc["kind"] = "derivatives-census"
+        outputs.write(args.json, shared.dumps(doc), "--json")
+    return EXIT_OK if census.clean(draws) else EXIT_FAIL
