@@ -48,6 +48,22 @@ def first_order(stiffness_over_inertia: np.ndarray) -> np.ndarray:
     return np.block([[np.zeros((n, n)), np.eye(n)], [-K, np.zeros((n, n))]])
 
 
+def flow_map(inertia: np.ndarray, stiffness: np.ndarray, h: float) -> np.ndarray:
+    """The exact flow ``exp(J h)`` of ``T q'' + V q = 0`` over h (2n x 2n): in normal coordinates each mode turns by
+    ``omega h`` (``[[cos, sin / omega], [-omega sin, cos]]``) ([T] O7)."""
+    from rigidbench.analytic.oscillations import normal_modes
+
+    modes = normal_modes(inertia, stiffness)
+    a, w = modes.shapes, modes.frequencies
+    n = len(w)
+    to_modes = a.T @ modes.inertia  # q_r = a_r^T T q
+    c, s = np.diag(np.cos(w * h)), np.diag(np.sin(w * h))
+    P = np.block([[a, np.zeros((n, n))], [np.zeros((n, n)), a]])
+    Q = np.block([[to_modes, np.zeros((n, n))], [np.zeros((n, n)), to_modes]])
+    R = np.block([[c, s @ np.diag(1 / w)], [-np.diag(w) @ s, c]])
+    return P @ R @ Q
+
+
 def transition_map(
     integrator: str, inertia: np.ndarray, stiffness: np.ndarray, h: float, spring_stiffness: np.ndarray | None = None
 ) -> np.ndarray:

@@ -9,6 +9,8 @@ For each smooth scenario (pendulum, coupled pendulums, pendulum chain, double pe
   ``T q'' + V q = 0`` (`rigidbench.analytic.linearised.transition_map`), T and V built from the parameters read
   back from the compiled model. The error is ``|A - A_theory|_F / |A_theory - 1|_F``: relative to what the step
   changes (the map is the identity plus O(h)), so a 1e-6 error in a force constant moves it by ~1e-6.
+- ``transition-flow`` (RK4): the same Jacobian against the exact flow ``exp(J h)``: a fourth-order map is the flow
+  to ``(omega h)^4 / 120`` of the step's change (the Euler family's O(omega h) is not scored against it).
 - ``transition-map-at-start`` (pendulum): the same at the case's release state (amplitude a, at rest), against
   the exact Jacobian of the integrator's map of the nonlinear pendulum (``omega0^2 cos a``).
 - ``map-omega`` / ``map-omega-slowest`` / ``map-omega-fastest``: the angle per step of the map's eigenvalues over
@@ -76,6 +78,16 @@ CHECKS: dict[str, Check] = {
             "against the smallest length that turns them into angles (rod length, spring height: "
             "`geometry_factor`, 1 at the defaults)",
             "O7: x_(k+1) = A x_k, A the integrator's map of T q'' + V q = 0 (analytic/linearised.py)",
+        ),
+        Check(
+            "transition-flow",
+            "1",
+            1e-9,
+            "abs",
+            "RK4 only: its map is exp(J h) but for the Taylor terms from (J h)^5 / 120 on, (omega_max h)^4 / 120 of "
+            "the step's change; the row's tolerance is (1e-9 + that) times transition-map's geometry factor "
+            "(measured 1e-12..9e-11 at the cases, against 1e-9..2.9e-9)",
+            "O7: the exact flow exp(J h) of T q'' + V q = 0, J = [[0, 1], [-T^-1 V, 0]]",
         ),
         Check(
             "transition-map-at-start",
@@ -369,6 +381,12 @@ def run_case(
     A_th = lin.transition_map(integrator, th.inertia, th.stiffness, h, th.springs)
     change = np.linalg.norm(A_th - np.eye(len(A_th)))
     outcomes.append(Outcome(scaled(CHECKS["transition-map"]), float(np.linalg.norm(A - A_th) / change), 0.0))
+    if integrator == "RK4":  # a 4th-order map is the exact flow to (omega h)^4 / 120 of the step's change
+        flow = lin.flow_map(th.inertia, th.stiffness, h)
+        order = (float(th.omegas.max()) * h) ** 4 / 120
+        outcomes.append(
+            Outcome(scaled(CHECKS["transition-flow"], 1 + order / 1e-9), float(np.linalg.norm(A - flow) / change), 0.0)
+        )
 
     if scenario.slug == "pendulum":
         start = mujoco.MjData(simulated)

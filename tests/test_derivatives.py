@@ -92,6 +92,8 @@ def test_a_one_in_a_million_error_of_the_simulated_model_fails_the_checks_that_s
 ):
     if quantity == "g" and target.startswith("pendulum:") and integrator != "RK4":
         catchers = catchers - {"period-amplitude-slope"}  # the Euler family's period error (1e-6 of T) hides it
+    if quantity == "g" and integrator == "RK4":
+        catchers = catchers | {"transition-flow"}
     rows = _rows(target, integrator, perturb=power.Perturbation(quantity, 1e-6))
     failed = {r["check"] for r in rows if r["status"] != PASS}
     assert catchers <= failed, f"{quantity}: failed {sorted(failed)}"
