@@ -159,3 +159,80 @@ def period_amplitude_slope(length: float, g: float, amplitude: float) -> float:
     m = np.sin(amplitude / 2) ** 2
     dk_dm = (special.ellipe(m) - (1 - m) * special.ellipk(m)) / (2 * m * (1 - m))
     return float(4 * np.sqrt(length / g) * dk_dm * np.sin(amplitude) / 2)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# A torque-free rigid body: Euler's equations in the body frame ([T] T1-T3)
+# ---------------------------------------------------------------------------------------------------------
+
+
+def _cross_matrix(a: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def euler_rates(inertia: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """``omega' = I^-1 ((I omega) x omega)``: Euler's equations, body frame, principal moments `inertia` (3,)."""
+    i = np.asarray(inertia, dtype=float)
+    w = np.asarray(omega, dtype=float)
+    return np.cross(i * w, w) / i
+
+
+def euler_jacobian(inertia: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """``d omega' / d omega = I^-1 ([I omega]x - [omega]x I)`` (3 x 3) of Euler's equations."""
+    i = np.asarray(inertia, dtype=float)
+    w = np.asarray(omega, dtype=float)
+    return (_cross_matrix(i * w) - _cross_matrix(w) @ np.diag(i)) / i[:, None]
+
+
+def rotation_map(integrator: str, inertia: np.ndarray, omega: np.ndarray, h: float) -> np.ndarray:
+    """The one-step Jacobian ``d omega_(k+1) / d omega_k`` (3 x 3) of a free body's body-frame rates under
+    `integrator` (the rates do not depend on the orientation without torques):
+
+    - ``Euler``: ``1 + h J``, J = `euler_jacobian`;
+    - ``implicit``, and as measured ``implicitfast`` and ``discrete`` too (MuJoCo keeps a free body's gyroscopic
+      derivative in their D; docs/derivatives.md): D = I J, the Coriolis forces' rate derivative, so
+      ``omega' = omega + h (1 - h J)^-1 f``, whose Jacobian is ``1 + h (1 - h J)^-1 (J + h (dJ . (1 - h J)^-1 f))``,
+      J linear in omega;
+    - ``RK4``: RK4 on the variational equations of Euler's.
+    """
+    w = np.asarray(omega, dtype=float)
+    J = euler_jacobian(inertia, w)
+    eye = np.eye(3)
+    if integrator == "Euler":
+        return eye + h * J
+    if integrator in ("implicit", "implicitfast", "discrete"):
+        solve = np.linalg.inv(eye - h * J)
+        step = solve @ euler_rates(inertia, w)  # (1 - h J)^-1 f
+        dJ = np.stack([euler_jacobian(inertia, e) for e in eye])  # dJ / d omega_k (J is linear in omega)
+        extra = np.stack([dJ[k] @ step for k in range(3)], axis=1)  # column k: dJ_k (1 - h J)^-1 f
+        return eye + h * solve @ (J + h * extra)
+    if integrator == "RK4":
+
+        def f(x: np.ndarray) -> np.ndarray:
+            return euler_rates(inertia, x)
+
+        def df(x: np.ndarray) -> np.ndarray:
+            return euler_jacobian(inertia, x)
+
+        k1, K1 = f(w), df(w)
+        w2, P2 = w + h / 2 * k1, eye + h / 2 * K1
+        k2, K2 = f(w2), df(w2) @ P2
+        w3, P3 = w + h / 2 * k2, eye + h / 2 * K2
+        k3, K3 = f(w3), df(w3) @ P3
+        K4 = df(w + h * k3) @ (eye + h * K3)
+        return eye + h / 6 * (K1 + 2 * K2 + 2 * K3 + K4)
+    raise ValueError(f"no rotation map for integrator {integrator!r}")
+
+
+def rotation_map_rate(integrator: str, rate: float, h: float) -> float:
+    """The angle per step over h (rad/s) of the eigenvalue a body-frame precession of `rate` (linearised about a
+    steady spin about a symmetry axis: ``omega_perp' = rate e3 x omega_perp``) has under `integrator`:
+    ``atan(rate h) / h`` for the Euler family and discrete (``1 + i rate h``, and ``1 / (1 - i rate h)`` for
+    implicit), and ``arg R(i rate h) / h`` for RK4."""
+    z = rate * h
+    if integrator in (*EULER_FAMILY, "discrete"):
+        return float(np.arctan(z) / h)
+    if integrator == "RK4":
+        iz = 1j * z
+        return float(np.angle(1 + iz + iz**2 / 2 + iz**3 / 6 + iz**4 / 24) / h)
+    raise ValueError(f"no rotation map for integrator {integrator!r}")

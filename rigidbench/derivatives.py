@@ -54,7 +54,12 @@ AMPLITUDE_STEP = 1e-2  # rad: the centred difference of the period over two roll
 # transition-map's worst error with margin: an eigenvector moves by the map's error over its eigenvalue's relative gap
 SHAPE_MAP_ERROR = 1e-9
 SHAPES_UNRESOLVED = 0.1  # a shape floor this large: the modes are degenerate to the map's precision
-SCENARIOS = ("pendulum", "coupled-pendulums", "pendulum-chain", "double-pendulum")
+SCENARIOS = ("pendulum", "coupled-pendulums", "pendulum-chain", "double-pendulum", "free-symmetric-top")
+TOPS = ("free-symmetric-top",)
+# the rates' finite-difference step for a spinning body (rad/s): Euler's equations are quadratic in the rates, so
+# centred differences are exact for the Euler family's map and O(eps^2 h^2) for RK4's; a larger step than EPS
+# keeps the rounding u |omega| / eps below 1e-8 of the step's change h |J| (~1e-3)
+EPS_RATES = 1e-4
 # The cases whose period slope is scored (where a +- da lies in the amplitude's range: `_slope_inside`): the
 # small-amplitude case's slope a T0 / 8 is below what two rollouts resolve, the near-inverted one's a + da leaves it.
 SLOPE_CASES = ("one-radian", "large-amplitude")
@@ -88,6 +93,29 @@ CHECKS: dict[str, Check] = {
             "the step's change; the row's tolerance is (1e-9 + that) times transition-map's geometry factor "
             "(measured 1e-12..9e-11 at the cases, against 1e-9..2.9e-9)",
             "O7: the exact flow exp(J h) of T q'' + V q = 0, J = [[0, 1], [-T^-1 V, 0]]",
+        ),
+        Check(
+            "rotation-map",
+            "1",
+            1e-9,
+            "abs",
+            f"centred differences of the rates, step {EPS_RATES:g} rad/s: exact for the Euler family's quadratic "
+            "map, O(eps^2 h^2) for RK4's; the rounding of the new rates, 4 u |omega| / (eps |B - 1|_F), is added "
+            "in each row (7e-9 at the cases, measured <= 3e-10)",
+            "T1: Euler's equations omega' = I^-1 ((I omega) x omega) through the integrator's map "
+            "(analytic/linearised.py rotation_map: Euler 1 + h J; implicit, implicitfast and discrete (1 - h J)^-1 "
+            "(measured: they keep the gyroscopic derivative); RK4 on the variational equations); no dependence on "
+            "the orientation without torques",
+        ),
+        Check(
+            "map-body-rate",
+            "rad/s",
+            1e-8,
+            "rel",
+            "the eigenvalues of the rates' map about a steady spin carry its error (rotation-map's floor) into the "
+            "angle per step",
+            "T1: body-frame precession Omega = (I3 - I1) omega3 / I1, through the map: atan(Omega h) / h (Euler "
+            "family), arg R(i Omega h) / h (RK4)",
         ),
         Check(
             "transition-map-at-start",
@@ -262,13 +290,13 @@ def _largest(vectors: np.ndarray) -> np.ndarray:
 # ---- what MuJoCo gives --------------------------------------------------------------------------------------------
 
 
-def transition(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+def transition(model: mujoco.MjModel, data: mujoco.MjData, eps: float = EPS) -> np.ndarray:
     """``d x_{k+1} / d x_k`` (2 nv x 2 nv) at `data`'s state: ``mjd_transitionFD`` (centred), or for RK4, which it
     refuses, centred differences of ``mj_step`` in the same tangent coordinates (qpos through mj_integratePos)."""
     nv = model.nv
     if model.opt.integrator != mujoco.mjtIntegrator.mjINT_RK4:
         A = np.zeros((2 * nv + model.na, 2 * nv + model.na))
-        mujoco.mjd_transitionFD(model, data, EPS, True, A, None, None, None)
+        mujoco.mjd_transitionFD(model, data, eps, True, A, None, None, None)
         return A[: 2 * nv, : 2 * nv]
     qpos0, qvel0 = data.qpos.copy(), data.qvel.copy()
     work = mujoco.MjData(model)
@@ -287,8 +315,8 @@ def transition(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
     A = np.empty((2 * nv, 2 * nv))
     for i in range(2 * nv):
         dx = np.zeros(2 * nv)
-        dx[i] = EPS
-        A[:, i] = (step(dx) - step(-dx)) / (2 * EPS)
+        dx[i] = eps
+        A[:, i] = (step(dx) - step(-dx)) / (2 * eps)
     return A
 
 
@@ -368,6 +396,8 @@ def run_case(
         simulated = copy.copy(model)
         perturb(simulated)
     h = float(model.opt.timestep)
+    if scenario.slug in TOPS:
+        return _case_run(scenario, prep, settings, _top_outcomes(prep, simulated, integrator), t0)
     th = theory(scenario.slug, model)
     n = len(th.omegas)
     outcomes: list[Outcome] = []
@@ -427,18 +457,56 @@ def run_case(
 
     if scenario.slug == "pendulum" and prep.case.name in SLOPE_CASES and _slope_inside(scenario, prep):
         outcomes.append(_slope(scenario, prep, overrides, settings, perturb, integrator))
+    return _case_run(scenario, prep, settings, outcomes, t0)
 
+
+def _case_run(scenario: Scenario, prep: Any, settings: Settings | None, outcomes: list[Outcome], t0: float) -> CaseRun:
     return CaseRun(
         scenario=scenario.slug,
         case=prep.case.name,
         params=prep.params,
-        settings=settings_record(model, settings),
+        settings=settings_record(prep.model, settings),
         outcomes=outcomes,
         diverged_at=None,
-        duration=h,
+        duration=float(prep.model.opt.timestep),
         nstep=1,
         wall_time=time.perf_counter() - t0,
     )
+
+
+def _top_outcomes(prep: Any, simulated: mujoco.MjModel, integrator: str) -> list[Outcome]:
+    """A free body's body-frame rates: their one-step Jacobian at the case's release state (rows of the rates against
+    the orientation and the rates) against `linearised.rotation_map` (zero against the orientation), and the angle
+    per step of its eigenvalues about a steady spin at the same axial rate against T1's body-frame precession rate
+    through the integrator's map. The moments are read back from the compiled model."""
+    model, h = prep.model, float(prep.model.opt.timestep)
+    body = int(model.jnt_bodyid[0])
+    if not np.allclose(model.body_iquat[body], [1, 0, 0, 0]):
+        raise ValueError("derivatives: the free body's principal axes must be its body axes")
+    inertia = model.body_inertia[body].copy()
+    outcomes = []
+    rows, cols = slice(9, 12), [3, 4, 5, 9, 10, 11]  # rates' rows; orientation and rates columns (tangent space)
+    for name, omega in (("rotation-map", prep.data.qvel[3:6].copy()), (None, np.array([0, 0, prep.data.qvel[5]]))):
+        data = mujoco.MjData(simulated)
+        data.qpos[:] = prep.data.qpos
+        data.qvel[:] = 0.0
+        data.qvel[3:6] = omega
+        mujoco.mj_forward(simulated, data)
+        A = transition(simulated, data, EPS_RATES)[rows][:, cols]
+        B = np.hstack([np.zeros((3, 3)), lin.rotation_map(integrator, inertia, omega, h)])
+        change = np.linalg.norm(B[:, 3:] - np.eye(3))
+        if name is not None:
+            check = CHECKS["rotation-map"]
+            floor = 4 * np.finfo(float).eps * float(np.abs(omega).max()) / (EPS_RATES * change)
+            err = float(np.linalg.norm(A - B) / change)
+            outcomes.append(Outcome(dataclasses.replace(check, tolerance=check.tolerance + floor), err, 0.0))
+            continue
+        lam = np.linalg.eigvals(A[:, 3:])
+        measured = float(np.abs(np.angle(lam)).max() / h)
+        rate = (inertia[2] - inertia[0]) * float(omega[2]) / inertia[0]  # T1: body-frame precession rate
+        expected = abs(lin.rotation_map_rate(integrator, rate, h))
+        outcomes.append(Outcome(CHECKS["map-body-rate"], measured, expected))
+    return outcomes
 
 
 def _integrator(model: mujoco.MjModel) -> str:
