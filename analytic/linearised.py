@@ -162,7 +162,7 @@ def period_amplitude_slope(length: float, g: float, amplitude: float) -> float:
 
 
 # ---------------------------------------------------------------------------------------------------------
-# A torque-free rigid body: Euler's equations in the body frame ([T] T1-T3)
+# A torque-free rigid body: Euler's equations in the body frame ([T] S1)
 # ---------------------------------------------------------------------------------------------------------
 
 

@@ -102,7 +102,7 @@ CHECKS: dict[str, Check] = {
             f"centred differences of the rates, step {EPS_RATES:g} rad/s: exact for the Euler family's quadratic "
             "map, O(eps^2 h^2) for RK4's; the rounding of the new rates, 4 u |omega| / (eps |B - 1|_F), is added "
             "in each row (7e-9 at the cases, measured <= 3e-10)",
-            "T1: Euler's equations omega' = I^-1 ((I omega) x omega) through the integrator's map "
+            "S1: Euler's equations omega' = I^-1 ((I omega) x omega) through the integrator's map "
             "(analytic/linearised.py rotation_map: Euler 1 + h J; implicit, implicitfast and discrete (1 - h J)^-1 "
             "(measured: they keep the gyroscopic derivative); RK4 on the variational equations); no dependence on "
             "the orientation without torques",
@@ -114,7 +114,7 @@ CHECKS: dict[str, Check] = {
             "rel",
             "the eigenvalues of the rates' map about a steady spin carry its error (rotation-map's floor) into the "
             "angle per step",
-            "T1: body-frame precession Omega = (I3 - I1) omega3 / I1, through the map: atan(Omega h) / h (Euler "
+            "S1: body-frame precession Omega = (I3 - I1) omega3 / I1 (Wilcox eq. 11.42), through the map: atan(Omega h) / h (Euler "
             "family), arg R(i Omega h) / h (RK4)",
         ),
         Check(
@@ -477,7 +477,7 @@ def _case_run(scenario: Scenario, prep: Any, settings: Settings | None, outcomes
 def _top_outcomes(prep: Any, simulated: mujoco.MjModel, integrator: str) -> list[Outcome]:
     """A free body's body-frame rates: their one-step Jacobian at the case's release state (rows of the rates against
     the orientation and the rates) against `linearised.rotation_map` (zero against the orientation), and the angle
-    per step of its eigenvalues about a steady spin at the same axial rate against T1's body-frame precession rate
+    per step of its eigenvalues about a steady spin at the same axial rate against S1's body-frame precession rate
     through the integrator's map. The moments are read back from the compiled model."""
     model, h = prep.model, float(prep.model.opt.timestep)
     body = int(model.jnt_bodyid[0])
@@ -503,7 +503,7 @@ def _top_outcomes(prep: Any, simulated: mujoco.MjModel, integrator: str) -> list
             continue
         lam = np.linalg.eigvals(A[:, 3:])
         measured = float(np.abs(np.angle(lam)).max() / h)
-        rate = (inertia[2] - inertia[0]) * float(omega[2]) / inertia[0]  # T1: body-frame precession rate
+        rate = (inertia[2] - inertia[0]) * float(omega[2]) / inertia[0]  # S1: body-frame precession rate
         expected = abs(lin.rotation_map_rate(integrator, rate, h))
         outcomes.append(Outcome(CHECKS["map-body-rate"], measured, expected))
     return outcomes
