@@ -114,8 +114,8 @@ CHECKS: dict[str, Check] = {
             "rel",
             "the eigenvalues of the rates' map about a steady spin carry its error (rotation-map's floor) into the "
             "angle per step",
-            "S1: body-frame precession Omega = (I3 - I1) omega3 / I1 (Wilcox eq. 11.42), through the map: atan(Omega h) / h (Euler "
-            "family), arg R(i Omega h) / h (RK4)",
+            "S1: body-frame precession Omega = (I3 - I1) omega3 / I1 (Wilcox eq. 11.42), through the map: "
+            "atan(Omega h) / h (Euler family), arg R(i Omega h) / h (RK4)",
         ),
         Check(
             "transition-map-at-start",
