@@ -7,4 +7,4 @@ jobs, a sweep's grid) and the helpers they share are in `rigidbench.commands.sha
 """
 
 # In the order `rigidbench --help` lists them.
-VERBS = ("list", "run", "sweep", "frontier", "census", "power", "compare", "report", "render")
+VERBS = ("list", "run", "derivatives", "sweep", "frontier", "census", "power", "compare", "report", "render")
