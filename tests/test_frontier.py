@@ -47,14 +47,16 @@ def test_cost_timing_of_a_known_stepping_loop_matches_stepping_it_directly():
     data = mujoco.MjData(prep.model)
     n = 20_000
     best = math.inf
-    for _ in range(3):
+    for _ in range(5):
         mujoco.mj_resetData(prep.model, data)
         t0 = time.process_time()
         mujoco.mj_step(prep.model, data, n)
         best = min(best, (time.process_time() - t0) / n)
     # rollout steps in C like mj_step's own loop: their CPU seconds per step agree within a loaded machine's noise
-    # (the fastest repeat of each, CPU time: what other processes do to the wall clock does not enter)
-    assert 0.5 < timing.cpu_spread[0] / best < 2.0
+    # (the fastest repeat of each, CPU time: what other processes do to the wall clock does not enter). Other
+    # processes still share the caches and the cores' clocks: with five on two cores (issue 36) one side's CPU time
+    # can double; 3x either way still tells stepping in C from a loop with Python in it (>10x a pendulum step).
+    assert 1 / 3 < timing.cpu_spread[0] / best < 3.0
 
 
 def test_frontier_errors_are_the_errors_run_reports_for_the_same_settings(tmp_path):
