@@ -96,7 +96,7 @@ class TaskEnv(ScenarioEnv):
         self.profile = profile
         if profile == "task":
             integrator = self.task_settings.get("integrator") if integrator is None else integrator
-            timestep = self.task_settings.get("timestep") if timestep is None else timestep
+            timestep = self.task_settings.get("timestep", self.reference_timestep) if timestep is None else timestep
             profile = "reference"
         elif profile == "reference" and timestep is None:
             timestep = self.reference_timestep

@@ -111,8 +111,12 @@ def test_cheapest_answers_the_cheapest_setting_below_the_target_or_says_none_doe
     refs = {"s": ("RK4", 1.0)}
     (a,) = frontier.cheapest(settings, 1e-6, refs)
     assert a.cheapest is settings[1] and a.speedup == pytest.approx(8.0)
+    # RK4 x8 is RK4's largest step on this grid: a larger one might meet 1e-6 too, and the answer says so (issue 36)
+    assert a.at_grid_edge and a.record()["at_grid_edge"] and "grid's edge" in frontier.answers_table([a])
     (b,) = frontier.cheapest(settings, 1e-12, refs)
-    assert b.cheapest is None and b.best is settings[0] and b.best_error == 1e-10
+    assert b.cheapest is None and b.best is settings[0] and b.best_error == 1e-10 and not b.at_grid_edge
+    (c,) = frontier.cheapest([*settings, frontier.Setting("s", "RK4", 64.0, diverged=True, error=math.inf)], 1e-6, refs)
+    assert c.cheapest is settings[1] and not c.at_grid_edge  # a larger step is on the grid (and diverged)
     with pytest.raises(ValueError, match="positive"):
         frontier.cheapest(settings, 0.0, refs)
 

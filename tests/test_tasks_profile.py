@@ -107,8 +107,12 @@ def test_every_task_states_its_settings_in_info_and_the_reference_profile_is_as_
     # The reference profile is the validation reference (with the task's own step where it set one), as before.
     assert ref._settings == settings_for("reference", timestep=cls.reference_timestep)
     assert env._settings == settings_for(
-        "reference", integrator=cls.task_settings.get("integrator"), timestep=cls.task_settings.get("timestep")
+        "reference",
+        integrator=cls.task_settings.get("integrator"),
+        timestep=cls.task_settings.get("timestep", cls.reference_timestep),
     )
+    if not cls.task_settings:  # a task whose settings are the reference's runs exactly as the reference profile
+        assert env._settings == ref._settings
 
 
 def test_the_task_settings_keep_the_reward_within_their_stated_bound():
