@@ -13,7 +13,8 @@ from ``self.np_random``. What makes these tasks special is that theory knows a g
     for the theory action, so a policy's regret measures it against the textbook, and the theory action's own
     regret measures how far MuJoCo's physics (soft contact, finite pulse) is from the textbook's;
   - `ClosedLoopTask` (a torque every step, a baseline controller as the theory policy): the rewards of the
-    theory policy simulated from the same initial state on a copy of the MjData at reset, step by step, so
+    theory policy simulated from the same initial state on a copy of the MjData taken at reset, step by step
+    alongside the episode, so
     ``sum(info["regret"])`` over an episode is the baseline's return minus the episode's.
 
 A task env sets `env_id` (its own gymnasium id, `rigidbench.registry.env_classes`) and `scenario_cls`.
@@ -21,6 +22,7 @@ A task env sets `env_id` (its own gymnasium id, `rigidbench.registry.env_classes
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Mapping
 from typing import Any, ClassVar
@@ -41,11 +43,17 @@ class TaskEnv(ScenarioEnv):
     params : mapping, optional
         Scenario parameter overrides (SI); ``reset(options={"params": ...})`` overrides them for an episode.
     regret : bool
-        Compute ``info["regret"]`` (default). A closed-loop task simulates its theory policy at every reset for
-        it; ``regret=False`` skips that (``info["regret"]`` is then NaN).
+        Compute ``info["regret"]`` (default). A closed-loop task simulates its theory policy alongside the
+        episode for it (one baseline step per step, none at reset); ``regret=False`` skips that (``info["regret"]``
+        is then NaN).
+    profile : str
+        ``"task"`` (default): the task's own settings (`task_settings`, on the reference profile), chosen for the
+        reward's resolution (issue 36); ``"reference"``: the validation reference, the task as it was before; or
+        any settings profile of `ScenarioEnv`.
+    integrator, timestep :
+        Override the profile's.
     **kwargs :
-        ``profile``, ``integrator``, ``timestep``, ``frame_skip``, ``render_mode``, ``width``, ``height``
-        (`ScenarioEnv`).
+        ``frame_skip``, ``render_mode``, ``width``, ``height`` (`ScenarioEnv`).
 
     Class attributes
     ----------------
@@ -65,7 +73,34 @@ class TaskEnv(ScenarioEnv):
     reward_terms: ClassVar[tuple[str, ...]]
     observables: ClassVar[tuple[str, ...]] = ()
 
-    def __init__(self, *, params: Mapping[str, Any] | None = None, regret: bool = True, **kwargs) -> None:
+    # Issue 36: the physics a task's reward needs, not the validation reference's. ``profile="task"`` (the default)
+    # runs the task at these settings (``integrator``, ``timestep`` in s; a key left out keeps the reference's), chosen
+    # from a sweep of integrators and steps (benchmarks/task_speed.py ``--sweep``) as the cheapest whose largest error
+    # on the reward terms, against the reference settings over sampled targets and actions, stays below
+    # `TASK_ERROR_BOUND`; `task_record` states the measured error and the theory action's regret there.
+    # ``profile="reference"`` is the task as it was before (the model's own settings, `reference_timestep`).
+    task_settings: ClassVar[dict[str, Any]] = {}
+    task_record: ClassVar[dict[str, Any]] = {}
+    reference_timestep: ClassVar[float | None] = None  # the reference profile's timestep where the task set one
+
+    def __init__(
+        self,
+        *,
+        params: Mapping[str, Any] | None = None,
+        regret: bool = True,
+        profile: str = "task",
+        integrator: str | None = None,
+        timestep: float | None = None,
+        **kwargs,
+    ) -> None:
+        self.profile = profile
+        if profile == "task":
+            integrator = self.task_settings.get("integrator") if integrator is None else integrator
+            timestep = self.task_settings.get("timestep", self.reference_timestep) if timestep is None else timestep
+            profile = "reference"
+        elif profile == "reference" and timestep is None:
+            timestep = self.reference_timestep
+        kwargs.update(profile=profile, integrator=integrator, timestep=timestep)
         self._with_regret = bool(regret)
         self._reward_keys = tuple(f"reward_{name}" for name in self.reward_terms)  # info's keys, built once
         self.target: dict[str, float] = {}
@@ -129,13 +164,23 @@ class TaskEnv(ScenarioEnv):
         else:
             self.target = self._complete_target({n: float(self.np_random.uniform(*ranges[n])) for n in ranges})
         self._start_episode()
-        self._reference = self._reference_rewards() if self._with_regret else None
+        if self._with_regret:
+            self._begin_reference()
         info = {"target": dict(self.target), "params": dict(self._actual), "settings": dict(self._settings_record)}
+        info["task_settings"] = self._task_info()
         return self.observe(), info
 
+    def _task_info(self) -> dict[str, Any]:
+        """The profile the task runs at and, at the task settings, what they were chosen for (`task_record`)."""
+        out: dict[str, Any] = {"profile": self.profile}
+        if self.profile == "task":
+            out.update(copy.deepcopy(self.task_settings), **copy.deepcopy(self.task_record))
+        return out
+
     def step(self, action):
-        action = self._checked_action(action)
+        # The reference first: a closed-loop task's lazy baseline checks its own actions through the same buffer.
         reference = self._reference_reward() if self._with_regret else math.nan
+        action = self._checked_action(action)
         return self._finish(reference, *self._advance(action))
 
     def _finish(self, reference: float, terms: dict[str, float], outcome: dict[str, Any]):
@@ -168,9 +213,8 @@ class TaskEnv(ScenarioEnv):
     def theory(self, t: np.ndarray) -> np.ndarray:
         return np.empty((len(t), 0))  # a task compares outcomes with its target, not a trajectory with theory
 
-    def _reference_rewards(self) -> np.ndarray | None:
-        """Computed once per episode at reset (after `_start_episode`); None if `_reference_reward` needs none."""
-        return None
+    def _begin_reference(self) -> None:
+        """Prepare the episode's regret reference at reset (after `_start_episode`); nothing by default."""
 
     def _checked_target(self, target: Mapping[str, Any], ranges: Mapping[str, tuple[float, float]]) -> dict:
         unknown = set(target) - set(ranges)
@@ -189,8 +233,9 @@ class TaskEnv(ScenarioEnv):
 class ClosedLoopTask(TaskEnv):
     """A task driven every step (a bounded torque) for a fixed time, with a baseline controller as the theory.
 
-    Regret: at reset the theory policy (`theory_action` every step) is simulated from the episode's initial
-    state on a copy of the MjData, through the same `_advance` as the agent's steps; ``info["regret"]`` at step
+    Regret: the theory policy (`theory_action` every step) is simulated from the episode's initial
+    state on a copy of the MjData taken at reset, through the same `_advance` as the agent's steps, one baseline
+    step ahead of each agent step (lazily: a reset costs a state copy, issue 36); ``info["regret"]`` at step
     k is that rollout's reward at step k minus the agent's. The theory policy therefore has regret 0 exactly
     (same code path, deterministic), which says nothing about its quality: each task's tests check what the
     baseline achieves against the theory's target state instead.
@@ -212,7 +257,6 @@ class ClosedLoopTask(TaskEnv):
         super().load(case, params)
         self.episode_duration = self._task_duration
         self._nsteps = max(1, round(self._task_duration / self._env_dt))
-        self._scratch = mujoco.MjData(self.model)
 
     def _advance(self, action: np.ndarray) -> tuple[dict[str, float], dict[str, Any]]:
         self.apply_action(action)
@@ -234,25 +278,91 @@ class ClosedLoopTask(TaskEnv):
         end = self._k >= self._nsteps
         return (end, False) if self.horizon_ends_task else (False, end)
 
-    def _reference_reward(self) -> float:
-        return float(self._reference[self._k]) if self._k < len(self._reference) else 0.0
+    # Completed baseline rollouts kept per episode configuration (target and parameters), at most this many.
+    REFERENCE_CACHE: ClassVar[int] = 64
 
-    def _reference_rewards(self) -> np.ndarray:
-        own = self.data
-        mujoco.mj_copyData(self._scratch, self.model, own)
-        self.data = self._scratch
-        rewards = np.zeros(self._nsteps)
+    def _begin_reference(self) -> None:
+        """Issue 36: a reset no longer simulates the baseline. It copies the episode's initial state into a scratch
+        MjData and the baseline is stepped from there only as far as a step's regret needs it (`_reference_reward`,
+        one baseline step per agent step), or all at once when `_reference` is read. The baseline runs the same
+        calls on the same state in the same order as the whole rollout at reset did, so its rewards are the same
+        bits. A completed rollout is kept per (target, parameters): a reset to a configuration seen before (a fixed
+        evaluation target) reuses it."""
+        self._ref_key = self._reference_key()
+        cached = self._reference_cache.get(self._ref_key) if self._ref_key is not None else None
+        if cached is not None:
+            self._ref_rewards, self._ref_k, self._ref_done = cached, self._nsteps, True
+            return
+        if getattr(self, "_ref_model", None) is not self.model:
+            self._ref_data = mujoco.MjData(self.model)  # one scratch MjData per model, not one per reset
+            self._ref_model = self.model
+        mujoco.mj_copyData(self._ref_data, self.model, self.data)
+        self._ref_rewards = np.zeros(self._nsteps)
+        self._ref_k = 0  # baseline steps simulated so far
+        self._ref_done = False
+
+    @property
+    def _reference_cache(self) -> dict:
+        cache = self.__dict__.get("_ref_cache")
+        if cache is None:
+            cache = self.__dict__["_ref_cache"] = {}
+        return cache
+
+    def _reference_key(self) -> tuple | None:
+        """The episode's configuration as a key (None if a parameter cannot be hashed: no caching then)."""
         try:
-            for k in range(self._nsteps):
+            key = (
+                tuple(sorted(self.target.items())),
+                tuple(sorted((k, type(v), v) for k, v in self._episode_params.items())),
+                self._nsteps,
+            )
+            hash(key)
+        except TypeError:
+            return None
+        return key
+
+    def _reference_upto(self, k: int) -> None:
+        """Simulate the baseline until its reward at step k is known (or it has ended), on the scratch MjData."""
+        if self._ref_done or self._ref_k > k:
+            return
+        own, own_k, own_obs = self._data, self._k, getattr(self, "_last_observation", None)
+        self.data = self._ref_data
+        self._k = self._ref_k
+        rewards, names = self._ref_rewards, self.reward_terms
+        try:
+            while self._k <= k and self._k < self._nsteps:
+                i = self._k
                 terms, outcome = self._advance(self._checked_action(self.theory_action()))  # as `step` applies it
                 if outcome.get("diverged"):  # the episode would end here, scored as `step` scores it
-                    rewards[k] = sum(self._diverged_terms()[name] for name in self.reward_terms)
+                    rewards[i] = sum(self._diverged_terms()[name] for name in names)
+                    self._ref_done = True
                     break
-                rewards[k] = sum(terms[name] for name in self.reward_terms)
+                rewards[i] = sum(terms[name] for name in names)
+            self._ref_k = self._k
+            if self._ref_k >= self._nsteps:
+                self._ref_done = True
         finally:
             self.data = own
-            self._k = 0
-        return rewards
+            self._k = own_k
+            self._last_observation = own_obs
+        if self._ref_done and self._ref_key is not None:
+            cache = self._reference_cache
+            if len(cache) >= self.REFERENCE_CACHE:
+                cache.pop(next(iter(cache)))
+            cache[self._ref_key] = rewards
+
+    @property
+    def _reference(self) -> np.ndarray:
+        """The baseline's reward at every step of the episode (completes the rollout if it is not yet)."""
+        self._reference_upto(self._nsteps)
+        return self._ref_rewards
+
+    def _reference_reward(self) -> float:
+        k = self._k
+        if k >= len(self._ref_rewards):
+            return 0.0
+        self._reference_upto(k)
+        return float(self._ref_rewards[k])
 
 
 class ShotTask(TaskEnv):

@@ -81,6 +81,10 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
         ``integrator``, ``timestep``, ``frame_skip`` (default 10, i.e. 1 ms), ``render_mode``, ``width``,
         ``height``.
 
+    Task Settings
+        ``profile="task"`` (default) is the reference's (not swept yet, issue 36); the baseline's regret is 0 by
+        construction (`ClosedLoopTask`). ``info["task_settings"]`` at reset.
+
     Version History
         v0: initial version.
     """
@@ -95,6 +99,8 @@ class TopPrecessionEnv(ClosedLoopTask, RotorEnv):
     # and faster than the nutation (~56 rad/s at the defaults) it damps; the tilt loop slower again.
     gain_momentum: ClassVar[float] = 200.0
     gain_tilt: ClassVar[float] = 20.0
+    # Task settings (issue 36): the reference's, not swept yet; the baseline's regret is 0 by construction.
+    task_record: ClassVar[dict[str, Any]] = {"theory_regret": 0.0, "swept": "not yet: the reference's settings"}
 
     def __init__(self, *, duration: float = 1.0, **kwargs) -> None:
         if not (math.isfinite(duration) and 0 < duration <= 60):

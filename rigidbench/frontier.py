@@ -190,6 +190,9 @@ class Answer:
     best: Setting | None
     best_error: float
     reference: Setting | None
+    # The cheapest setting is its integrator's largest step on the grid (issue 36): a larger step, off the grid, may
+    # meet the target too, so the answer is an upper bound on the cost: extend the grid (--timesteps) past it.
+    at_grid_edge: bool = False
 
     @property
     def speedup(self) -> float | None:
@@ -207,6 +210,7 @@ class Answer:
             "best_error": self.best_error,
             "best": self.best.record() if self.best else None,
             "times_cheaper_than_reference": self.speedup,
+            "at_grid_edge": self.at_grid_edge,
         }
 
 
@@ -252,7 +256,8 @@ def cheapest(settings: Sequence[Setting], target: float, references: Mapping[str
             ok = [s for e, s in errors if e <= target]
             best_error, best = min(errors, key=lambda x: (x[0], x[1].cpu))
             pick = min(ok, key=lambda s: s.cpu) if ok else None
-            answer = Answer(slug, check, target, pick, best, best_error, reference)
+            edge = pick is not None and pick.scale >= max(s.scale for s in group if s.integrator == pick.integrator)
+            answer = Answer(slug, check, target, pick, best, best_error, reference, at_grid_edge=edge)
             if check is None:
                 whole = answer
                 answers.append(answer)
@@ -322,7 +327,7 @@ def answers_table(answers: Sequence[Answer], markdown: bool = False) -> str:
                 a.scenario,
                 a.check or "all",
                 f"{a.target:g}",
-                _where(a.cheapest),
+                _where(a.cheapest) + (" (grid's edge: a larger step may do)" if a.at_grid_edge else ""),
                 _g(_error_of(a.cheapest, a.check)),
                 _g(a.cheapest.cpu, ".3g"),
                 _g(a.speedup, ".3g"),

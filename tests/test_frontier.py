@@ -47,14 +47,16 @@ def test_cost_timing_of_a_known_stepping_loop_matches_stepping_it_directly():
     data = mujoco.MjData(prep.model)
     n = 20_000
     best = math.inf
-    for _ in range(3):
+    for _ in range(5):
         mujoco.mj_resetData(prep.model, data)
         t0 = time.process_time()
         mujoco.mj_step(prep.model, data, n)
         best = min(best, (time.process_time() - t0) / n)
     # rollout steps in C like mj_step's own loop: their CPU seconds per step agree within a loaded machine's noise
-    # (the fastest repeat of each, CPU time: what other processes do to the wall clock does not enter)
-    assert 0.5 < timing.cpu_spread[0] / best < 2.0
+    # (the fastest repeat of each, CPU time: what other processes do to the wall clock does not enter). Other
+    # processes still share the caches and the cores' clocks: with five on two cores (issue 36) one side's CPU time
+    # can double; 3x either way still tells stepping in C from a loop with Python in it (>10x a pendulum step).
+    assert 1 / 3 < timing.cpu_spread[0] / best < 3.0
 
 
 def test_frontier_errors_are_the_errors_run_reports_for_the_same_settings(tmp_path):
@@ -109,8 +111,12 @@ def test_cheapest_answers_the_cheapest_setting_below_the_target_or_says_none_doe
     refs = {"s": ("RK4", 1.0)}
     (a,) = frontier.cheapest(settings, 1e-6, refs)
     assert a.cheapest is settings[1] and a.speedup == pytest.approx(8.0)
+    # RK4 x8 is RK4's largest step on this grid: a larger one might meet 1e-6 too, and the answer says so (issue 36)
+    assert a.at_grid_edge and a.record()["at_grid_edge"] and "grid's edge" in frontier.answers_table([a])
     (b,) = frontier.cheapest(settings, 1e-12, refs)
-    assert b.cheapest is None and b.best is settings[0] and b.best_error == 1e-10
+    assert b.cheapest is None and b.best is settings[0] and b.best_error == 1e-10 and not b.at_grid_edge
+    (c,) = frontier.cheapest([*settings, frontier.Setting("s", "RK4", 64.0, diverged=True, error=math.inf)], 1e-6, refs)
+    assert c.cheapest is settings[1] and not c.at_grid_edge  # a larger step is on the grid (and diverged)
     with pytest.raises(ValueError, match="positive"):
         frontier.cheapest(settings, 0.0, refs)
 

@@ -224,14 +224,18 @@ def _soft_bound(env) -> float:
     return float(env.prediction["_tolerance"]["projectile-lab-angle-hard"])
 
 
-def test_scatter_to_angle_theory_action_is_optimal_up_to_the_soft_contact_shift():
+@pytest.mark.parametrize("profile", ["reference", "task"])
+def test_scatter_to_angle_theory_action_is_optimal_up_to_the_soft_contact_shift(profile):
     """The hard-sphere optimum misses only by the soft-sphere shift of the simulated contact (a k^-1/2 finding of
-    the hard-spheres scenario), episode by episode; reachable or not."""
-    env = gym.make("rigidbench/ScatterToAngle-v0").unwrapped
+    the hard-spheres scenario), episode by episode; reachable or not. At the task settings (Euler at 4 us, issue 36)
+    the integration moves the angle by up to the settings' stated error bound either way (measured 5e-5 rad, bound
+    1e-4: `task_record`), so the regret may be that much below 0 or above the soft shift."""
+    env = gym.make("rigidbench/ScatterToAngle-v0", profile=profile).unwrapped
+    slack = env.task_record["error_bound"] if profile == "task" else 1e-12
     regrets = []
     for s in range(12):
         regrets.append(_episode(env, _theory, seed=s)[1])
-        assert -1e-12 <= regrets[-1] <= _soft_bound(env)
+        assert -slack <= regrets[-1] <= _soft_bound(env) + (slack if profile == "task" else 0.0)
     env.action_space.seed(0)
     random = [_episode(env, _random, seed=s)[1] for s in range(12)]
     print(
@@ -244,7 +248,8 @@ def test_scatter_to_angle_theory_action_is_optimal_up_to_the_soft_contact_shift(
 def test_lab_angle_never_exceeds_arcsin_m2_over_m1():
     """C3: with m1/m2 = 3 no impact parameter sends the projectile beyond arcsin(1/3); an unreachable target's
     best is psi_max itself, at b0."""
-    env = gym.make("rigidbench/ScatterToAngle-v0").unwrapped
+    # C3 at the scenario's own tolerance: the reference settings it is stated for (the task settings: issue 36)
+    env = gym.make("rigidbench/ScatterToAngle-v0", profile="reference").unwrapped
     psi_max = np.arcsin(1 / 3)
     for a in np.linspace(-1, 1, 9):
         env.reset(options={"target": {"angle": 0.5}})
@@ -257,7 +262,7 @@ def test_lab_angle_never_exceeds_arcsin_m2_over_m1():
 
 def test_a_heavy_projectile_reaches_a_target_angle_on_both_branches():
     """C3: for x > 1 each psi < psi_max comes from two CM angles (stretch b > b0, short b < b0): both optimal."""
-    env = gym.make("rigidbench/ScatterToAngle-v0").unwrapped
+    env = gym.make("rigidbench/ScatterToAngle-v0", profile="reference").unwrapped
     env.reset(options={"target": {"angle": 0.2}})
     actions = env.theory_actions()
     b0 = 2 * np.sqrt((3 - 1) / (2 * 3)) * 0.05  # a sqrt((x - 1)/(2x)), a = 0.1 m
