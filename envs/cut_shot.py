@@ -1,0 +1,452 @@
+"""The rolling cut shot: a rolling cue ball hits an equal resting ball off-centre; the MuJoCo side, and its env.
+
+Theory: docs/theory.md B4 (the "30 degree rule"), with B2-B3 for each ball's skid and C2/C8 for the impact, in
+`rigidbench.analytic.cut_shot`. Model: ``models/cut_shot.xml``: two free solid balls on the cloth of
+``models/cue_strike.xml`` (Coulomb friction ``mu``), their impact a frictionless elastic contact pair (the undamped
+direct-solref spring of ``models/hard_spheres.xml``, `rigidbench.contact`). Conventions (`analytic.cut_shot`): the
+object ball rests at the origin, the cue ball rolls along +x at ``speed`` on the +y side, offset 2 R sin(phi), and
+touches it after `LEAD_STEPS` steps; the object ball leaves at -phi, the cue ball is deflected towards +y.
+
+What MuJoCo simulates is a soft impact lasting t_c = pi / sqrt(k) (40 steps), during which the table's friction
+acts too. The checks therefore compare against the impact MuJoCo's spring makes (C8's CM angle, and the friction
+impulse mu M g t_c the two balls' opposite slips add to the impact), to the integration error, and against the
+hard-sphere closed forms of B4 to the soft shift ~ pi sin(phi) V / (2 R sqrt(k)), set per run.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import mujoco
+import numpy as np
+
+from rigidbench import signals
+from rigidbench.analytic import cut_shot, scattering
+from rigidbench.contact import RESOLVED_STEPS, contact_spring, elastic_contact
+from rigidbench.contract import Case, Check, Derived, Scenario, Trajectory
+from rigidbench.envs.cue_strike import TABLE_GRAVITY, billiard_settings, skid_speed_param
+from rigidbench.envs.pair import FreePairEnv
+from rigidbench.envs.planar import free_body_motion
+from rigidbench.params import GeomFriction, Numeric, Param, Range, ScaledBodyMass, SphereRadius
+
+BALLS = ("cue", "object")
+# Steps of rolling before the balls touch: the impact's force begins on a step boundary (hard-spheres' LEAD_STEPS).
+LEAD_STEPS = 20
+# Cut angles (rad) the scenario covers: 5.7 to 74.5 degrees. Below, the cue ball all but stops (its speed after the
+# impact is V sin phi) and its direction is ill-defined; above, the object ball barely moves (V cos phi).
+CUT_RANGE = (0.1, 1.3)
+# The friction-free margin a rolling run keeps after the slower ball rolls (in roll times).
+AFTER_ROLL = 0.5
+
+_RK4 = (
+    f"RK4 over the impact: {RESOLVED_STEPS} steps per contact pi / sqrt(k), the force's kink at the exit inside a "
+    "step (second order there): velocity error ~ (sqrt(k) dt)^2 / 24 = 2.6e-4 relative in the normal direction"
+)
+_FRICTION = (
+    "the table's friction during the soft impact (t_c = pi / sqrt(k)): the two balls slip oppositely along the line "
+    "of centres, so their friction impulses (mu M g t_c each) cancel in the total momentum and add mu M g t_c to the "
+    "spring's impulse (predicted); what remains is second order, the slip direction turning by the soft shift"
+)
+CHECKS = (
+    Check(
+        "opening-angle",
+        "rad",
+        1e-3,
+        "abs",
+        "angle between the two velocities at the end of the impact (the separation crossing 2 R, cubic-interpolated). "
+        + _RK4
+        + "; "
+        + _FRICTION
+        + ": bound 2 (pi/40)^2/24 + 2 mu g t_c (1 / |v_cue| + 1 / |v_object|) / 10 per run",
+        "C2 for equal masses: psi + zeta = pi / 2 after any elastic central impact ([D] B4: 'the two leave at 90 "
+        "degrees')",
+    ),
+    Check(
+        "object-direction",
+        "rad",
+        1e-3,
+        "abs",
+        "object ball's direction at the end of the impact: " + _RK4 + "; the soft impact's CM angle from C8's "
+        "quadrature; bound as opening-angle",
+        "C8 + C2: zeta = (pi - theta_soft) / 2, theta_soft the CM angle of the spring V = 1/2 mu k (2R - r)^2",
+    ),
+    Check(
+        "object-direction-hard",
+        "rad",
+        5e-3,
+        "abs",
+        "as object-direction, plus 1.5 times the first-order soft shift / 2 (C8: pi (b / a) V / (a sqrt(k)), a = 2R, "
+        "k^-1/2), set per run; listed at the defaults",
+        "B4 / C5: the object ball leaves along the line of centres at the touch, at the cut angle phi",
+    ),
+    Check(
+        "deflection",
+        "rad",
+        1e-3,
+        "abs",
+        "cue ball's final direction from its first line (both balls rolling, end of the run): angular momentum about "
+        "its table contact point is conserved through the skid, so only the impact's impulse matters: "
+        + _RK4
+        + "; bound 2 (pi/40)^2/24 + the resting penetration's lever (R - delta/2 for R: ~1e-5)",
+        "B4 (with B2-B3): v_cue = V x - J / (M (1 + gamma)), J the impact's impulse (C8's soft CM angle plus the "
+        "friction impulse mu M g t_c)",
+    ),
+    Check(
+        "deflection-closed-form",
+        "rad",
+        1e-2,
+        "abs",
+        "as deflection, plus 1.5 times the soft impact's and the contact friction's moves of delta from B4's "
+        "hard-sphere value (|d delta / d theta| pi (b / a) V / (a sqrt(k)), k^-1/2; and what mu M g t_c adds), "
+        "set per run; listed at the defaults",
+        "B4: tan delta = 5 sin phi cos phi / (2 cos^2 phi + 7 sin^2 phi)",
+    ),
+    Check(
+        "max-deflection",
+        "rad",
+        1e-2,
+        "abs",
+        "as deflection-closed-form (at phi*, d delta / d phi = 0: the value is insensitive to the cut angle)",
+        "B4: delta* = 33.75 degrees at tan phi* = sqrt(2/7) (the '30 degree rule')",
+    ),
+    Check(
+        "final-angle",
+        "rad",
+        1e-3,
+        "abs",
+        "angle between the two rolling velocities at the end of the run; bound as deflection",
+        "B4: the impact's J: v_cue = V x - J / (M (1 + gamma)), v_object = J / (M (1 + gamma)); arctan(3.5 tan phi) "
+        "for hard spheres",
+    ),
+    Check(
+        "cue-final-speed",
+        "m/s",
+        1e-3,
+        "rel",
+        "cue ball's rolling speed at the end of the run: " + _RK4 + "; relative to the cue speed V",
+        "B4 (B2's 2/7 rule as vectors): |V x - (5/7) J / M|, (V / 7) sqrt(4 + 45 sin^2 phi) for hard spheres",
+    ),
+    Check(
+        "object-final-speed",
+        "m/s",
+        1e-3,
+        "rel",
+        "object ball's rolling speed at the end of the run: " + _RK4 + "; relative to the cue speed V",
+        "B2's 5/7 rule: |v_object| = (5/7) |J| / M, (5/7) V cos phi for hard spheres",
+    ),
+)
+_TOLERANCE = {c.name: c.tolerance for c in CHECKS}
+_ALL = tuple(c.name for c in CHECKS if c.name != "max-deflection")
+
+
+@dataclass(frozen=True)
+class Both:
+    """One parameter target applied to both balls (equal balls): read back from the first."""
+
+    targets: tuple[Any, ...]
+
+    def apply(self, spec: mujoco.MjSpec, value: Any) -> None:
+        for target in self.targets:
+            target.apply(spec, value)
+
+    def read(self, model: mujoco.MjModel) -> Any:
+        return self.targets[0].read(model)
+
+
+def _max_cut(p: Mapping[str, Any]) -> float:
+    return cut_shot.max_deflection()[0]
+
+
+def settle(model: mujoco.MjModel, data: mujoco.MjData) -> float:
+    """Let both balls settle on the cloth, apart (30 contact time constants, as cue_strike.settle); return the
+    resting height (m) of their centres."""
+    radius = float(model.geom("cue").size[0])
+    for i, body in enumerate(BALLS):
+        adr = model.jnt_qposadr[model.body(body).jntadr[0]]
+        data.qpos[adr : adr + 7] = [0, 4 * radius * i, radius, 1, 0, 0, 0]
+    data.qvel[:] = 0.0
+    solref = model.geom("cue").solref
+    time_constant = solref[0] if solref[0] > 0 else 1.0 / np.sqrt(-solref[0])
+    mujoco.mj_step(model, data, nstep=max(1, round(30 * time_constant / model.opt.timestep)))
+    return float(data.qpos[model.jnt_qposadr[model.body("cue").jntadr[0]] + 2])
+
+
+class CutShot(Scenario):
+    """A rolling cue ball cuts an equal resting ball: 90 degrees after the impact, then the 30 degree rule."""
+
+    slug = "cut-shot"
+    title = "Rolling cut shot: the balls part at 90 degrees, the cue ball re-rolls off by at most 33.75 degrees"
+    env_id = "rigidbench/CutShot-v0"
+    params = (
+        Param(
+            "radius",
+            "m",
+            "radius R of both solid balls (I = 2/5 M R^2)",
+            Range(1e-3, 1.0),
+            Both((SphereRadius("cue", "cue"), SphereRadius("object", "object"))),
+        ),
+        Param(
+            "mass",
+            "kg",
+            "mass M of each ball",
+            Range(1e-6, 100.0),
+            Both((ScaledBodyMass("cue"), ScaledBodyMass("object"))),
+        ),
+        Param(
+            "mu",
+            "1",
+            "Coulomb friction coefficient between the balls and the cloth (the balls' impact is frictionless)",
+            Range(1e-3, 2.0),
+            GeomFriction(("cue", "object", "table")),
+        ),
+        # Each ball's slip after the impact is V cos(phi) (hard spheres): cos(1.3) .. cos(0.1) of V.
+        skid_speed_param("speed V of the rolling cue ball before the impact", (math.cos(CUT_RANGE[1]), 1.0)),
+        Param(
+            "cut",
+            "rad",
+            "cut angle phi between the cue ball's velocity and the line of centres at the touch",
+            Range(*CUT_RANGE),
+            Numeric("cut"),
+        ),
+        TABLE_GRAVITY,
+    )
+    cases = (
+        Case("thirty", "cut at 30 degrees: the cue ball re-rolls 33.7 degrees off its line", {}, _ALL),
+        Case(
+            "max-deflection",
+            "cut at tan phi = sqrt(2/7) (28.1 degrees): the largest deflection, 33.75 degrees",
+            {"cut": _max_cut},
+            (*_ALL, "max-deflection"),
+        ),
+        Case("full", "a full hit, 10 degrees: the cue ball nearly stops, then follows at 2/7 V", {"cut": 0.1745}, _ALL),
+        Case("thin", "a thin cut, 60 degrees: the object ball leaves slowly", {"cut": 1.0472}, _ALL),
+    )
+    checks = CHECKS
+
+    def reference_settings(self, params: Mapping[str, Any]) -> dict[str, Derived]:
+        derived = billiard_settings(params)
+        derived.pop("pulse_duration")  # no cue pulse: the cue ball starts rolling
+        dt = derived["timestep"].value
+        k = (math.pi / (RESOLVED_STEPS * dt)) ** 2
+        derived["impact_stiffness"] = Derived(
+            k, f"k = (pi / ({RESOLVED_STEPS} dt))^2 = {k:.6g} 1/s^2: the ball-ball impact lasts {RESOLVED_STEPS} steps"
+        )
+        return derived
+
+    def apply_derived(self, spec: mujoco.MjSpec, name: str, value: float) -> None:
+        if name == "contact_stiffness":
+            for geom in (*BALLS, "table"):
+                spec.geom(geom).solref = [-value, -2 * math.sqrt(value)]
+        elif name == "solver":
+            spec.option.solver = mujoco.mjtSolver(int(value))
+        elif name == "impact_stiffness":
+            spec.pair("impact").solref = [-value, 0.0]
+        else:
+            super().apply_derived(spec, name, value)
+
+    def check_model(self, model: mujoco.MjModel) -> None:
+        dt = float(model.opt.timestep)
+        for solref in (model.geom("cue").solref, model.pair_solref[0]):
+            if solref[0] < 0:  # direct format: MuJoCo's safety clamp is off; refuse an unresolvable contact
+                elastic_contact(timestep=dt, stiffness=float(-solref[0]))
+
+    def initial_state(self, model: mujoco.MjModel, data: mujoco.MjData, params: Mapping[str, Any]) -> None:
+        z = settle(model, data)
+        radius, speed, cut = float(model.geom("cue").size[0]), float(params["speed"]), float(params["cut"])
+        a = 2 * radius
+        lead = speed * LEAD_STEPS * float(model.opt.timestep)
+        start = {"cue": (-a * math.cos(cut) - lead, a * math.sin(cut)), "object": (0.0, 0.0)}
+        data.qvel[:] = 0.0
+        for body in BALLS:
+            jnt = model.body(body).jntadr[0]
+            data.qpos[model.jnt_qposadr[jnt] : model.jnt_qposadr[jnt] + 7] = [*start[body], z, 1, 0, 0, 0]
+        mujoco.mj_forward(model, data)
+        # Rolling without slip at MuJoCo's contact point, the middle of the resting penetration: lever z - z_contact.
+        cue = model.body("cue").id
+        lever = next(
+            z - float(c.pos[2])
+            for c in data.contact[: data.ncon]
+            if cue in (model.geom_bodyid[c.geom1], model.geom_bodyid[c.geom2])
+        )
+        dof = model.jnt_dofadr[model.body("cue").jntadr[0]]
+        data.qvel[dof : dof + 6] = [speed, 0.0, 0.0, 0.0, speed / lever, 0.0]
+        data.time = 0.0
+
+    def predict(self, model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, Any]:
+        p = self.read_params(model)
+        mu, g = p["mu"], p["g"]
+        radius = float(model.geom("cue").size[0])
+        a = 2 * radius
+        gamma = float(model.body("cue").inertia[1] / (model.body("cue").mass[0] * radius**2))
+        q = {b: model.jnt_qposadr[model.body(b).jntadr[0]] for b in BALLS}
+        d = {b: model.jnt_dofadr[model.body(b).jntadr[0]] for b in BALLS}
+        speed = float(data.qvel[d["cue"]])
+        offset = float(data.qpos[q["cue"] + 1] - data.qpos[q["object"] + 1])  # b (m)
+        gap = float(data.qpos[q["object"]] - data.qpos[q["cue"]]) - math.sqrt(a * a - offset * offset)
+        phi = math.asin(offset / a)
+        k = contact_spring(model.pair_solref[0], float(model.opt.timestep)).stiffness
+        t_c = math.pi / math.sqrt(k)
+        theta = float(scattering.soft_sphere_cm_angle(offset, a, k, speed))
+        soft = cut_shot.object_impulse(speed, theta)
+        # The friction impulse the opposite slips add to the spring's impulse (module docstring): mu M g t_c.
+        impulse = soft * (1.0 + mu * g * t_c / float(np.hypot(*soft)))
+        shot = cut_shot.CutShot(speed, impulse, mu, g, gamma)
+        hard = cut_shot.cut_shot(speed, phi, mu, g, gamma)
+        # Per-run tolerances (module docstring, the checks' reasons).
+        rk4 = 2 * (math.sqrt(k) * float(model.opt.timestep)) ** 2 / 24
+        after = rk4 + 0.2 * mu * g * t_c * (1 / np.hypot(*shot.cue_after) + 1 / np.hypot(*shot.object_after))
+        shift = float(scattering.soft_sphere_shift_first_order(offset, a, k, speed))
+        step = 1e-6
+        slope = (
+            cut_shot.cut_shot(speed, phi, mu, g, gamma, cm_angle=math.pi - 2 * phi + step).deflection - hard.deflection
+        ) / step
+        moved = abs(slope) * shift + abs(
+            shot.deflection - cut_shot.cut_shot(speed, phi, mu, g, gamma, cm_angle=theta).deflection
+        )
+        final = rk4 + 1e-4
+        return {
+            "_tolerance": {
+                "opening-angle": after,
+                "object-direction": after,
+                "object-direction-hard": after + 0.75 * shift,
+                "deflection": final,
+                "deflection-closed-form": final + 1.5 * moved,
+                "max-deflection": final + 1.5 * moved,
+                "final-angle": final,
+                "cue-final-speed": final,
+                "object-final-speed": final,
+            },
+            "_floor": {"cue-final-speed": speed, "object-final-speed": speed},
+            "_shot": shot,
+            "_mu": mu,
+            "_t0": gap / speed,
+            "_t_c": t_c,
+            "_a": a,
+            "_start": {b: np.array(data.qpos[q[b] : q[b] + 2]) for b in BALLS},
+            "opening-angle": math.pi / 2,
+            "object-direction": 0.5 * (math.pi - theta),
+            "object-direction-hard": phi,
+            "deflection": shot.deflection,
+            "deflection-closed-form": float(cut_shot.deflection(phi, gamma)),
+            "max-deflection": cut_shot.max_deflection(gamma)[1],
+            "final-angle": shot.final_angle,
+            "cue-final-speed": float(np.hypot(*shot.cue_final)),
+            "object-final-speed": float(np.hypot(*shot.object_final)),
+        }
+
+    def duration(self, prediction: Mapping[str, Any]) -> float:
+        shot: cut_shot.CutShot = prediction["_shot"]
+        return prediction["_t0"] + prediction["_t_c"] + (1 + AFTER_ROLL) * shot.time_to_roll
+
+    def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
+        cue, obj = (free_body_motion(model, traj, b) for b in BALLS)
+        t = cue.time
+        separation = np.hypot(*(cue.com_W[:, :2] - obj.com_W[:, :2]).T) - prediction["_a"]
+        exits = signals.crossings(t, separation, direction=1)
+        if not len(exits):
+            return {c.name: np.nan for c in CHECKS}
+        touches = signals.crossings(t, separation, direction=-1)
+        t_e = np.array([exits[0]])
+        v_cue = np.array([float(signals.interpolate(t, cue.v_W[:, i], t_e)[0]) for i in range(2)])
+        v_obj = np.array([float(signals.interpolate(t, obj.v_W[:, i], t_e)[0]) for i in range(2)])
+        # The hop's friction put back (the friction clock of cue-strike): MuJoCo's soft cone raises the table's
+        # normal force during the impact (the balls leave it at v_z ~ 1.5 g t_c), and each ball's friction, mu
+        # times that normal impulse M (g t_c + dv_z), pushes the balls together: the impact's impulse grows by mu M
+        # dv_z (mean of the two balls) beyond the predicted mu M g t_c, along the impulse. Put back from the final
+        # velocities (v = +-J / (M (1 + gamma))).
+        window = np.array([touches[0] if len(touches) else t[0], exits[0]])
+        dvz = np.mean([np.diff(signals.interpolate(t, mo.v_W[:, 2], window))[0] for mo in (cue, obj)])
+        gamma = prediction["_shot"].gamma
+        along = v_obj / np.hypot(*v_obj)
+        hop = prediction["_mu"] * dvz * along / (1 + gamma)
+        cue_final, obj_final = cue.v_W[-1, :2] + hop, obj.v_W[-1, :2] - hop
+        delta = math.atan2(cue_final[1], cue_final[0])
+        return {
+            "opening-angle": cut_shot.angle_between(v_cue, v_obj),
+            "object-direction": math.atan2(-v_obj[1], v_obj[0]),
+            "object-direction-hard": math.atan2(-v_obj[1], v_obj[0]),
+            "deflection": delta,
+            "deflection-closed-form": delta,
+            "max-deflection": delta,
+            "final-angle": cut_shot.angle_between(cue_final, obj_final),
+            "cue-final-speed": float(np.hypot(*cue_final)),
+            "object-final-speed": float(np.hypot(*obj_final)),
+        }
+
+
+class CutShotEnv(FreePairEnv):
+    """``rigidbench/CutShot-v0``: the rolling cut shot, scored against B4's skids every step.
+
+    Description
+        Two solid balls (radius ``radius``, mass ``mass``) on a cloth with Coulomb friction ``mu``: the object ball
+        rests at the origin, the cue ball rolls along +x at ``speed`` and touches it at cut angle ``cut`` after 20
+        physics steps. With zero action the balls part at 90 degrees and each skids (docs/theory.md B3) until it
+        rolls; the cue ball ends up deflected by tan delta = 5 sin phi cos phi / (2 cos^2 phi + 7 sin^2 phi) (B4).
+
+    Observation Space
+        Box(-inf, inf, (12,)), float64:
+
+        ====  ==========================================  =====  ======================================
+        idx   quantity                                    unit   MuJoCo source
+        ====  ==========================================  =====  ======================================
+        0-2   cue ball's centre, world frame              m      qpos of free joint ``cue``
+        3-5   object ball's centre, world frame           m      qpos of free joint ``object``
+        6-8   cue ball's velocity, world frame            m/s    qvel (linear part) of ``cue``
+        9-11  object ball's velocity, world frame         m/s    qvel (linear part) of ``object``
+        ====  ==========================================  =====  ======================================
+
+    Action Space
+        Box(-1, 1, (3,)), float32, normalised: ``max_force = 0.1`` N times it is a force on the cue ball's centre
+        in world axes, through ``xfrc_applied``; clipped. Zero action = the textbook problem.
+
+    Rewards
+        ``reward = -|r - r_theory(t)| / (2 R)``: the distance between the simulated relative position r = x_cue -
+        x_object and the impulsive impact followed by both balls' B3 skids, in units of the contact distance 2R;
+        ``info["measured"]`` and ``info["predicted"]`` hold r as ``r_x, r_y, r_z`` (m). Each step's deviation
+        counts up to ``DEVIATION_CAP`` = 10 (rewards >= -10).
+
+    Starting State
+        Both balls on the cloth at their resting penetration; the cue ball rolling without slip.
+
+    Episode End
+        Truncated after the scenario's duration (the impact, then 1.5 roll times); terminated on divergence.
+        The diverged step pays -10 for itself and for each step left (`ScenarioEnv`).
+
+    Arguments
+        ``case`` (thirty, max-deflection, full, thin), ``params`` (radius, mass, mu, speed, cut, g), ``profile``,
+        ``integrator``, ``timestep``, ``frame_skip`` (default 100, i.e. 1 ms), ``render_mode``.
+
+    Version History
+        v0: initial version.
+    """
+
+    scenario_cls = CutShot
+    default_frame_skip: ClassVar[int] = 100
+    max_force: ClassVar[float] = 0.1
+
+    def load(self, case: str, params) -> None:
+        super().load(case, params)
+        model = self.model
+        adr = {name: model.joint(name).id for name in BALLS}
+        self._slices = tuple(
+            (array, slice(int(start[adr[name]]), int(start[adr[name]]) + 3))
+            for array, start in (("qpos", model.jnt_qposadr), ("qvel", model.jnt_dofadr))
+            for name in BALLS
+        )
+        self._body_id = model.body("cue").id
+        self._scale = float(self.prediction["_a"])
+        self.start_views()
+
+    def theory(self, t: np.ndarray) -> np.ndarray:
+        """r(t) = x_cue - x_object (m), shape (len(t), 3): rolling straight, an impulsive impact at the touch, then
+        both balls' B3 skids and rolling."""
+        p = self.prediction
+        shot: cut_shot.CutShot = p["_shot"]
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        tau = np.maximum(t - p["_t0"], 0.0)
+        before = np.minimum(t, p["_t0"])[:, None] * np.array([shot.speed, 0.0])
+        r = (p["_start"]["cue"] + before + shot.cue.position(tau)) - (p["_start"]["object"] + shot.object.position(tau))
+        return np.column_stack([r, np.zeros(len(t))])
