@@ -94,7 +94,9 @@ CHECKS = (
         "cue ball's final direction from its first line (both balls rolling, end of the run): angular momentum about "
         "its table contact point is conserved through the skid, so only the impact's impulse matters: "
         + _RK4
-        + "; bound 2 (pi/60)^2/24 + the resting penetration's lever (R - delta/2 for R: ~1e-5)",
+        + "; bound 2 (pi/60)^2/24 + 1e-4: MuJoCo's contact point sits in the resting penetration delta, a lever "
+        "R - delta/2 for B2's R (delta / R = 1 / (k T^2) = 3.4e-5 for every ball, the settings following T), "
+        "~1e-5 on the rolling velocities; with the hops' friction put back (see measure); measured <= 1e-5",
         "B4 (with B2-B3): v_cue = V x - J / (M (1 + gamma)), J the impact's impulse (C8's soft CM angle plus the "
         "friction impulse mu M g t_c)",
     ),
