@@ -345,7 +345,6 @@ class CutShot(Scenario):
             "_t0": gap / speed,
             "_t_c": t_c,
             "_a": a,
-            "_start": {b: np.array(data.qpos[q[b] : q[b] + 2]) for b in BALLS},
             "opening-angle": math.pi / 2,
             "object-direction": 0.5 * (math.pi - theta),
             "object-direction-hard": phi,
