@@ -75,15 +75,17 @@ _EXACT_RATE = (
     "samples and the exact motion's at the same step times, so its own bias cancels; what is left is RK4's: each of "
     "the swing's two circular modes, at -Omega_z +- omega', runs slow by (lambda dt)^4/120, which slows the plane's "
     "turn (their mean) by 5 (omega0 dt)^4/120 (1 + O((Omega/omega0)^2)) relative (4.1e-8 at 200 steps a period; "
-    "measured 0.995-1.006 of it), x 2; + the reference's own error (DOP853 at rtol 1e-12: 1e-9, measured <= 1.5e-10 "
-    "against an independent inertial-frame integration); + round-off 10 n eps. ~8.2e-8 at the defaults"
+    "measured 0.98-1.02 of it over 40 census draws), x 2; + the reference's own error (DOP853 at rtol 1e-12: 1e-9, "
+    "measured <= 1.5e-10 against an independent inertial-frame integration); + round-off 10 n eps. ~8.2e-8 at the "
+    "defaults"
 )
 _PATH = (
     "the bob's position in the platform's axes at every step against the exact motion at the same time: RK4 slows "
     "each circular mode's phase by omega t (omega0 dt)^4/120 by time t, moving the bob by at most its horizontal "
-    "amplitude A = l sin(a) times that (measured 0.99-1.0 of A omega0 T (omega0 dt)^4/120 at the run's end T), x 2 "
-    "(set per run); + the reference's own error (DOP853 at rtol 1e-12: 1e-9 rad a period times A, measured <= 2.3e-10 "
-    "against an independent inertial-frame integration); + round-off 10 n eps l. ~7.5e-8 m at the defaults"
+    "amplitude A = l sin(a) times that (measured 0.98-1.0 of A omega0 T (omega0 dt)^4/120, T the run's end, over 40 "
+    "census draws), x 2 (set per run); + the reference's own error (DOP853 at rtol 1e-12: 1e-9 rad a period times A, "
+    "measured <= 2.3e-10 against an independent inertial-frame integration); + round-off 10 n eps l. ~7.5e-8 m at "
+    "the defaults"
 )
 _EXACT_THEORY = (
     "N1, exact rotating-frame equations: the spherical pendulum (rod l, the bob's isotropic 1e-9 kg m^2 as O2) on a "
