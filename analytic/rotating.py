@@ -193,6 +193,8 @@ def rotating_pendulum(
     t_end: float,
     *,
     rtol: float = 1e-12,
+    inertia_ratio: float = 0.0,
+    spin: float | None = None,
 ) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
     """The spherical pendulum in the rotating frame, integrated without approximation (docs/theory.md N1).
 
@@ -201,13 +203,25 @@ def rotating_pendulum(
     scipy's DOP853 at `rtol` (absolute tolerance `rtol` x l), the same rod constraint as docs/theory.md N2's
     independent check.
 
+    A bob of moment of inertia I about its centre, the same about every axis (`inertia_ratio` k = I / (m l^2)),
+    makes the pendulum a rigid body: its spin s = omega . r/l about the rod (inertial angular velocity) is then
+    constant, and the moment of m r x a + I omega' = m r x g about the pivot gives the tangential acceleration
+    ``(m r x g - I s v_I / l) x r / (m l^2 + I)`` -- gravity reduced by 1/(1 + k) against the inertial terms
+    (the rotating frame's Coriolis and centrifugal accelerations are kinematic: they keep their full size), and a
+    gyroscopic ``-(k s / ((1 + k) l)) v_I x r``, v_I = v + Omega x r the inertial velocity. `spin` s (rad/s)
+    defaults to ``Omega . r0 / l``: released without turning about its rod relative to the frame.
+
     Returns
     -------
     callable
         ``t -> (r, v)`` (m, m/s), each of shape (3, len(t)), for ``0 <= t <= t_end``.
     """
-    gx, gy, gz = (float(c) for c in field)
+    k = float(inertia_ratio)
+    gx, gy, gz = (float(c) / (1 + k) for c in field)
     wx, wy, wz = (float(c) for c in rate_vec)
+    if spin is None:
+        spin = float(np.dot(rate_vec, r0)) / float(np.linalg.norm(r0))
+    gyro = k * float(spin) / ((1 + k) * float(length))
 
     def rhs(_t, s):
         # N1 written out in floats (np.cross costs ~5 us a call; the solver calls this ~1e5 times a run).
@@ -216,6 +230,11 @@ def rotating_pendulum(
         ax = gx - 2 * (wy * vz - wz * vy) - (wy * cz - wz * cy)
         ay = gy - 2 * (wz * vx - wx * vz) - (wz * cx - wx * cz)
         az = gz - 2 * (wx * vy - wy * vx) - (wx * cy - wy * cx)
+        if gyro:
+            ux, uy, uz = vx + cx, vy + cy, vz + cz  # v_I
+            ax -= gyro * (uy * z - uz * y)
+            ay -= gyro * (uz * x - ux * z)
+            az -= gyro * (ux * y - uy * x)
         tension = -(vx * vx + vy * vy + vz * vz + x * ax + y * ay + z * az) / (x * x + y * y + z * z)
         return np.array([vx, vy, vz, ax + tension * x, ay + tension * y, az + tension * z])
 

@@ -40,6 +40,16 @@ STEPS_PER_PERIOD = 200
 RATE_RATIO = (0.01, 0.05)
 # Equator: the swing's azimuth is fitted over this many periods.
 EQUATOR_PERIODS = 20
+# The exact companions (precession-rate-exact, swing-path): the reference is `analytic.rotating.rotating_pendulum`
+# at this relative tolerance (DOP853); MuJoCo's RK4 errors, predicted to leading order, are doubled.
+REFERENCE_RTOL = 1e-12
+RK4_MARGIN = 2.0
+# The reference's own error, bounded from its comparison with an independent integration (inertial frame,
+# spherical angles, LSODA; tests/test_rotating_exact.py) over the domain's corners: its half-turn rate within
+# this fraction (measured <= 1.5e-10), its path within this phase (rad) per period times the swing's amplitude
+# (measured <= 2.3e-10).
+REFERENCE_RATE_ERROR = 1e-9
+REFERENCE_PHASE_PER_PERIOD = 1e-9
 # The equator's check: the compiled axis's sin(lambda) (read back; ~eps at most) turns the swing plane at Omega x
 # it; round-off cannot turn it at all (measured 0: the swing's North components stay exactly 0 by the symmetry of
 # every operation on them).
@@ -59,6 +69,28 @@ _PLATFORM = (
     "platform about its axis: Omega is constant in exact arithmetic, whatever the platform's inertia (1e9 kg m^2 only "
     "keeps the reaction's wobble of the hinge's numbers small), and its measured drift is round-off: tolerance "
     "10 n eps over the run's n steps (1.6e-11 at the defaults, measured 0)"
+)
+_EXACT_RATE = (
+    "the same estimator (the azimuth at each maximum excursion, cubic-interpolated; the half turn) reads MuJoCo's "
+    "samples and the exact motion's at the same step times, so its own bias cancels; what is left is RK4's: each of "
+    "the swing's two circular modes, at -Omega_z +- omega', runs slow by (lambda dt)^4/120, which slows the plane's "
+    "turn (their mean) by 5 (omega0 dt)^4/120 (1 + O((Omega/omega0)^2)) relative (4.1e-8 at 200 steps a period; "
+    "measured 0.98-1.02 of it over 40 census draws), x 2; + the reference's own error (DOP853 at rtol 1e-12: 1e-9, "
+    "measured <= 1.5e-10 against an independent inertial-frame integration); + round-off 10 n eps. ~8.2e-8 at the "
+    "defaults"
+)
+_PATH = (
+    "the bob's position in the platform's axes at every step against the exact motion at the same time: RK4 slows "
+    "each circular mode's phase by omega t (omega0 dt)^4/120 by time t, moving the bob by at most its horizontal "
+    "amplitude A = l sin(a) times that (measured 0.98-1.0 of A omega0 T (omega0 dt)^4/120, T the run's end, over 40 "
+    "census draws), x 2 (set per run); + the reference's own error (DOP853 at rtol 1e-12: 1e-9 rad a period times A, "
+    "measured <= 2.3e-10 against an independent inertial-frame integration); + round-off 10 n eps l. ~7.5e-8 m at "
+    "the defaults"
+)
+_EXACT_THEORY = (
+    "N1, exact rotating-frame equations: the spherical pendulum (rod l, the bob's isotropic 1e-9 kg m^2 as O2) on a "
+    "platform turning at a constant Omega, gravity fixed in its axes, integrated to rtol 1e-12 (analytic.rotating."
+    "rotating_pendulum)"
 )
 CHECKS = (
     Check(
@@ -95,6 +127,22 @@ CHECKS = (
         "O1 with O2 (the bob's 1e-9 kg m^2): T = 4 sqrt(l_eq/g) K(sin(a/2)), unchanged by the rotation on the equator",
     ),
     Check(
+        "precession-rate-exact",
+        "rad/s",
+        8.2e-8,
+        "rel",
+        _EXACT_RATE,
+        f"{_EXACT_THEORY}: the time its swing plane takes to turn by pi, read as precession-rate reads it",
+    ),
+    Check(
+        "swing-path",
+        "m",
+        7.5e-8,
+        "abs",
+        _PATH,
+        f"{_EXACT_THEORY}: the bob's path relative to the platform",
+    ),
+    Check(
         "platform-rate",
         "1",
         1.6e-11,
@@ -104,7 +152,7 @@ CHECKS = (
         identity=True,
     ),
 )
-_TURNING = ("precession-rate", "platform-rate")
+_TURNING = ("precession-rate", "precession-rate-exact", "swing-path", "platform-rate")
 
 
 def _rate_range(p: Mapping[str, Any]) -> Range:
@@ -192,7 +240,7 @@ class Foucault(Scenario):
             "equator",
             "the equator, an East-West swing: Omega is horizontal and the plane does not turn",
             {"latitude": 0.0, "azimuth": 0.0},
-            ("equator-precession", "swing-period", "platform-rate"),
+            ("equator-precession", "swing-period", "swing-path", "platform-rate"),
             ranges={"latitude": Range(0.0, 0.0), "azimuth": Range(0.0, 0.0)},
             regime="lambda = 0 exactly, released East-West: the plane of swing is then invariant by symmetry",
         ),
@@ -235,7 +283,7 @@ class Foucault(Scenario):
         omega0 = math.sqrt(mass * pl.g * length / inertia_pivot)  # O2: the bob's own 1e-9 kg m^2 included
         down = rot.plumb_line(pl.field, pl.rate_vec, length)
         east, north = rot.horizontal_axes(down)
-        r0 = self._bob(model, data.qpos[None], data.qvel[None], length)[0][0]
+        r0, v0 = (x[0] for x in self._bob(model, data.qpos[None], data.qvel[None], length))
         amplitude = math.acos(min(1.0, float(r0 @ down) / length))
         azimuth = math.atan2(float(r0 @ north), float(r0 @ east))
         period = 2 * math.pi / omega0
@@ -247,10 +295,33 @@ class Foucault(Scenario):
         drift = 10 * round(duration / dt) * np.finfo(float).eps
         rk4 = 10 * 5 * (omega0 * dt) ** 4 / 120
         tolerance = {"platform-rate": drift}
+        # The exact companions: the exact motion sampled at MuJoCo's step times k dt (check swing-path's reason).
+        steps = round(duration / dt)
+        times = np.arange(steps + 1) * dt
+        ratio = float(body.inertia[0]) / (mass * length**2)
+        r, v = (
+            x.T
+            for x in rot.rotating_pendulum(
+                length, pl.field, pl.rate_vec, r0, v0, times[-1], rtol=REFERENCE_RTOL, inertia_ratio=ratio
+            )(times)
+        )
+        horizontal = length * math.sin(amplitude)
+        phase = omega0 * times[-1] * (omega0 * dt) ** 4 / 120
+        tolerance["swing-path"] = (
+            RK4_MARGIN * horizontal * phase
+            + REFERENCE_PHASE_PER_PERIOD * times[-1] / period * horizontal
+            + 10 * steps * np.finfo(float).eps * length
+        )
+        exact_rate = 0.0
         terms = {}
         if not equator:
             terms = rot.precession_neglected_terms(pl.rate_vec, down, omega0, amplitude, pl.latitude)
             tolerance["precession-rate"] = rot.precession_tolerance(terms) + drift + rk4
+            tips, tip_azimuths, _, _ = swing(times, r, v, (east, north), period)
+            exact_rate = swing_rates(tips, tip_azimuths, expected)[1]
+            tolerance["precession-rate-exact"] = (
+                RK4_MARGIN * 5 * (omega0 * dt) ** 4 / 120 + REFERENCE_RATE_ERROR + drift
+            )
         else:
             tolerance["equator-precession"] = abs(pl.rate) * max(abs(float(pl.axis[2])), float(np.finfo(float).eps))
             tolerance["swing-period"] = 10 * (omega0 * dt) ** 4 / 120  # RK4 frequency error x 10
@@ -271,7 +342,11 @@ class Foucault(Scenario):
             "_rate_vec": pl.rate_vec,
             "_duration": duration,
             "_tolerance": tolerance,
+            "_inertia_ratio": ratio,
+            "_exact_path": r,
             "precession-rate": expected,
+            "precession-rate-exact": exact_rate,
+            "swing-path": 0.0,
             "equator-precession": 0.0,
             "swing-period": osc.pendulum_period(inertia_pivot / (mass * length), pl.g, amplitude),
             "platform-rate": 0.0,
@@ -293,35 +368,65 @@ class Foucault(Scenario):
         """The swing seen from above the plumb line: times (s) and azimuths (rad, unwrapped modulo pi, from East
         towards North) at each maximum excursion, the release included, and the horizontal path (X, Y) (m)."""
         r, v = self._bob(model, traj.qpos, traj.qvel, prediction["_length"])
-        east, north = prediction["_axes"]
-        x, y, vx, vy = r @ east, r @ north, v @ east, v @ north
-        times, _ = signals.extrema(traj.time, x * x + y * y, 2 * (x * vx + y * vy), "max")
-        times = times[times > 0.25 * prediction["_period"]]
-        xs = np.concatenate([[x[0]], signals.interpolate(traj.time, x, times)]) if times.size else x[:1]
-        ys = np.concatenate([[y[0]], signals.interpolate(traj.time, y, times)]) if times.size else y[:1]
-        times = np.concatenate([[traj.time[0]], times])
-        azimuth = np.unwrap(2 * np.arctan2(ys, xs)) / 2  # a line's direction is defined modulo pi
-        return times, azimuth, x, y
+        return swing(traj.time, r, v, prediction["_axes"], prediction["_period"])
 
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
-        times, azimuth, _, _ = self.swing(model, traj, prediction)
-        slope = float(np.polyfit(times - times.mean(), azimuth, 1)[0]) if len(times) >= 2 else math.nan
-        rate = slope
-        expected = prediction["precession-rate"]
-        if expected != 0 and len(times) >= 4:
-            # The half-turn: the first time the plane is back on its starting line, turned by pi either way.
-            sense = 1.0 if slope > 0 else -1.0
-            back = signals.crossings(times, azimuth - (azimuth[0] + sense * math.pi))
-            if back.size:
-                rate = sense * math.pi / float(back[0])
+        r, v = self._bob(model, traj.qpos, traj.qvel, prediction["_length"])
+        times, azimuth, _, _ = swing(traj.time, r, v, prediction["_axes"], prediction["_period"])
+        slope, rate = swing_rates(times, azimuth, prediction["precession-rate"])
         spin = rotating.spin_rate(model, traj.qvel)
+        exact = prediction["_exact_path"]
+        if exact.shape != r.shape:  # a run of another length than predicted (an env's episode): solved afresh
+            grid = np.arange(len(r)) * float(model.opt.timestep)
+            exact = rot.rotating_pendulum(
+                prediction["_length"],
+                prediction["_field"],
+                prediction["_rate_vec"],
+                prediction["_r0"],
+                v[0],
+                grid[-1],
+                rtol=REFERENCE_RTOL,
+                inertia_ratio=prediction["_inertia_ratio"],
+            )(grid)[0].T
         tips = times[1:]  # the turning points after the release: two a period
         return {
             "swing-period": 2 * signals.mean_spacing(tips),
             "precession-rate": rate,
+            "precession-rate-exact": rate,
+            "swing-path": float(np.max(np.linalg.norm(r - exact, axis=1))),
             "equator-precession": slope,
             "platform-rate": float(np.max(np.abs(spin / spin[0] - 1))),
         }
+
+
+def swing(time: np.ndarray, r: np.ndarray, v: np.ndarray, axes: tuple[np.ndarray, np.ndarray], period: float):
+    """The swing of a bob at positions `r` and velocities `v` (m, m/s, shape (n, 3), platform axes) sampled at
+    `time`, seen from above the plumb line (`axes` = its East and North): times (s) and azimuths (rad, unwrapped
+    modulo pi, from East towards North) at each maximum excursion (cubic-interpolated), the release included, and
+    the horizontal path (X, Y) (m). The same estimator reads MuJoCo's samples and the exact motion's."""
+    east, north = axes
+    x, y, vx, vy = r @ east, r @ north, v @ east, v @ north
+    times, _ = signals.extrema(time, x * x + y * y, 2 * (x * vx + y * vy), "max")
+    times = times[times > 0.25 * period]
+    xs = np.concatenate([[x[0]], signals.interpolate(time, x, times)]) if times.size else x[:1]
+    ys = np.concatenate([[y[0]], signals.interpolate(time, y, times)]) if times.size else y[:1]
+    times = np.concatenate([[time[0]], times])
+    azimuth = np.unwrap(2 * np.arctan2(ys, xs)) / 2  # a line's direction is defined modulo pi
+    return times, azimuth, x, y
+
+
+def swing_rates(times: np.ndarray, azimuth: np.ndarray, expected: float) -> tuple[float, float]:
+    """The swing plane's rates (rad/s) from its azimuths at the turning points (`swing`): the least-squares slope,
+    and the half turn's pi / t_pi, t_pi the first time the plane is back on its starting line, turned by pi either
+    way (the slope where it never is, or where `expected` is 0)."""
+    slope = float(np.polyfit(times - times.mean(), azimuth, 1)[0]) if len(times) >= 2 else math.nan
+    rate = slope
+    if expected != 0 and len(times) >= 4:
+        sense = 1.0 if slope > 0 else -1.0
+        back = signals.crossings(times, azimuth - (azimuth[0] + sense * math.pi))
+        if back.size:
+            rate = sense * math.pi / float(back[0])
+    return slope, rate
 
 
 class FoucaultEnv(ScenarioEnv):
@@ -406,7 +511,13 @@ class FoucaultEnv(ScenarioEnv):
         p = self.prediction
         if getattr(self, "_motion_for", None) is not p:
             self._motion = rot.rotating_pendulum(
-                p["_length"], p["_field"], p["_rate_vec"], p["_r0"], np.zeros(3), 1.05 * p["_duration"] + 1.0
+                p["_length"],
+                p["_field"],
+                p["_rate_vec"],
+                p["_r0"],
+                np.zeros(3),
+                1.05 * p["_duration"] + 1.0,
+                inertia_ratio=p["_inertia_ratio"],
             )
             self._motion_for = p
         r, _ = self._motion(np.clip(np.asarray(t, dtype=float), 0.0, None))
