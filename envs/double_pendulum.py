@@ -23,6 +23,11 @@ Time scales: the timestep follows the fast mode (2 ms in the unequal case, 1.76 
 solves r + 2 + 1/r = (1 + m2/m1)(1 + l2/l1)^2 / (l2/l1) (O6's quartic), which bounds length2 to [length1 / 199, 199
 length1] and mass2 to [1e-3 mass1, (402 lambda / (1 + lambda)^2 - 1) mass1], lambda = length2 / length1 (ranges
 that depend on the others).
+
+Exact companions (issue 35): the linear checks' tolerances are sized by the neglected amplitude^2 terms, so each has a
+companion ``<check>-exact`` that applies the same measurement to the exact nonlinear motion of the same model (every
+number read back from the compiled model; `rigidbench.analytic.oscillations_exact`), sampled at the simulation's
+times, and reports the difference: RK4's error at the run's step is what is left (frequencies and shapes, every case).
 """
 
 from __future__ import annotations

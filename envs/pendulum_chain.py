@@ -20,6 +20,12 @@ tolerances, and the attachment points of neighbours stay s/10 apart (`pendulums.
 Time scales: the timestep follows the highest mode (2 ms at the defaults), and a run lasts 30.5 periods of the
 lowest; kappa = k d^2 / (m g l) <= 24.75 (a range of k that depends on m, g, l and d: omega_highest / omega_lowest
 <= 10) keeps runs below 3e5 steps.
+
+Exact companions (issue 35): the linear checks' tolerances are sized by the neglected amplitude^2 terms, so each has a
+companion ``<check>-exact`` that applies the same measurement to the exact nonlinear motion of the same model (every
+number read back from the compiled model; `rigidbench.analytic.oscillations_exact`), sampled at the simulation's
+times, and reports the difference: RK4's error at the run's step is what is left (every mode's frequency, and the
+mode purity).
 """
 
 from __future__ import annotations
@@ -339,7 +345,9 @@ class PendulumChain(Scenario):
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
         t, theta = traj.time, traj.qpos
         omegas, purity = _observe(t, theta, prediction["_modes"])
-        ref = exact.motion(t, pendulums.spring_row(model).acceleration, prediction["_modes"], prediction["_angles0"])
+        ref = exact.motion(
+            t, exact.SpringRow(**pendulums.spring_row(model)).acceleration, prediction["_modes"], prediction["_angles0"]
+        )
         valid = ref.bound <= _REF  # else the reference did not converge (beyond the linear regime): the companions fail
         omegas_ref, purity_ref = _observe(t, ref.angles, prediction["_modes"]) if valid else (omegas, purity)
         ratio = omegas / omegas_ref - 1

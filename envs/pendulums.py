@@ -25,7 +25,6 @@ import mujoco
 import numpy as np
 
 from rigidbench import signals
-from rigidbench.analytic import oscillations_exact as exact
 from rigidbench.contract import Derived
 from rigidbench.envs.base import ScenarioEnv
 from rigidbench.params import Value
@@ -323,9 +322,10 @@ def springs(model: mujoco.MjModel) -> Springs:
     )
 
 
-def spring_row(model: mujoco.MjModel) -> exact.SpringRow:
-    """The side-by-side pendulums and springs of `model` as the exact equations of motion take them
-    (`rigidbench.analytic.oscillations_exact.SpringRow`): every number read back from the compiled model.
+def spring_row(model: mujoco.MjModel) -> dict[str, Any]:
+    """The side-by-side pendulums and springs of `model` as the exact equations of motion take them: the keyword
+    arguments of `rigidbench.analytic.oscillations_exact.SpringRow` (not imported here: the simple pendulum's reading
+    stays short), every number read back from the compiled model.
 
     Raises
     ------
@@ -347,15 +347,15 @@ def spring_row(model: mujoco.MjModel) -> exact.SpringRow:
     pend = pendulums(model)
     g = gravity(model)
     sp = springs(model)
-    return exact.SpringRow(
-        inertia_pivot=np.array([p.inertia_pivot for p in pend]),
-        mgl=np.array([p.mass * g * p.length for p in pend]),
-        pivot_x=np.array([p.pivot_x for p in pend]),
-        height=sp.height,
-        pairs=sp.pairs,
-        stiffness=sp.stiffness,
-        rest_length=sp.rest_length,
-    )
+    return {
+        "inertia_pivot": np.array([p.inertia_pivot for p in pend]),
+        "mgl": np.array([p.mass * g * p.length for p in pend]),
+        "pivot_x": np.array([p.pivot_x for p in pend]),
+        "height": sp.height,
+        "pairs": sp.pairs,
+        "stiffness": sp.stiffness,
+        "rest_length": sp.rest_length,
+    }
 
 
 def rk4_frequency_error(omega: float, timestep: float) -> float:
