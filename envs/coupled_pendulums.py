@@ -26,7 +26,13 @@ Time scales: the timestep follows the fastest mode, omega_a (2 ms in the weak-co
 defaults), and a run lasts 30.5 periods of the slowest excited mode, or 2.5 transfer times T_x = pi / (omega_a -
 omega_s) if both are excited. Two domains keep runs below ~1e6 steps: kappa <= 199.5 (omega_a / omega_s <= 20; a
 range of k that depends on m, g, l and d) and, where both modes are excited, kappa >= 2e-3 (T_x <= 250 carrier
-periods)."""
+periods).
+
+Exact companions (issue 35): the linear checks' tolerances are sized by the neglected amplitude^2 terms, so each has a
+companion ``<check>-exact`` that applies the same measurement to the exact nonlinear motion of the same model (every
+number read back from the compiled model; `rigidbench.analytic.oscillations_exact`), sampled at the simulation's
+times, and reports the difference: RK4's error at the run's step is what is left (the beats cases; the symmetric
+releases are predicted exactly already)."""
 
 from __future__ import annotations
 
@@ -38,6 +44,7 @@ import mujoco
 import numpy as np
 
 from rigidbench.analytic import oscillations as osc
+from rigidbench.analytic import oscillations_exact as exact
 from rigidbench.contract import Case, Check, Derived, Domain, Scenario, Trajectory
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, PendulumEnv, RodLength, SpringHeight, SpringStiffness
@@ -109,6 +116,79 @@ CHECKS = (
         "O3: " + pendulums.SPRING_CHAIN_ENERGY,
     ),
 )
+# Exact companions (issue 35): each linear check measured the same way on the exact nonlinear motion of the same model
+# (`rigidbench.analytic.oscillations_exact`), sampled at the simulation's times; what is left is the integrator's.
+EXACT_THEORY = (
+    "{ids} exact: the nonlinear equations of motion of the model as compiled (I_O th_i'' = -M g h sin th_i - k (L - "
+    "L0) dL/dth_i, L the spring's length between its attachment points), solved by Picard's iteration of Duhamel's "
+    "formula to <= 1e-11 of the amplitude; {what}"
+)
+# The reference's error budget, relative to the amplitude: its a-posteriori bound (`ExactMotion.bound`) is <= 2 eps
+# w_max t_run (its phases' rounding) + ~1e-15 (iteration and quadrature), <= 1.7e-12 over the cases' ranges.
+_REF = 1e-11
+_RK4 = (
+    "RK4 at the run's step: relative frequency error eps4 = (omega_a dt)^4 / 120 (1.3e-11 in the default cases); the "
+    "same measurement applied to both, so only the integrator's error (and the reference's 1e-11) is left; "
+)
+EXACT_CHECKS = (
+    Check(
+        "omega-in-phase-exact",
+        "1",
+        1.4e-10,
+        "abs",
+        _RK4 + "tolerance 10 eps4 + 1e-11" + pendulums.ROUNDOFF.format(factor="0.5", measured="as omega-in-phase"),
+        EXACT_THEORY.format(ids="O3", what="omega_s measured / omega_s of the exact motion, minus 1"),
+    ),
+    Check(
+        "omega-anti-phase-exact",
+        "1",
+        1.4e-10,
+        "abs",
+        _RK4 + "tolerance 10 eps4 + 1e-11" + pendulums.ROUNDOFF.format(factor="0.5", measured="as omega-anti-phase"),
+        EXACT_THEORY.format(ids="O3", what="omega_a measured / omega_a of the exact motion, minus 1"),
+    ),
+    Check(
+        "shape-in-phase-exact",
+        "1",
+        5e-11,
+        "abs",
+        _RK4 + "the fit's ratio moves with the difference of the modes' phase drifts, measured <= 7.4e-4 eps4 omega_a "
+        "t_run (default cases): tolerance 0.01 eps4 omega_a t_run + 1e-11"
+        + pendulums.ROUNDOFF.format(factor="3", measured="as shape-in-phase"),
+        EXACT_THEORY.format(ids="O3/O7", what="th2/th1 of the in-phase mode, measured minus exact"),
+    ),
+    Check(
+        "shape-anti-phase-exact",
+        "1",
+        5e-11,
+        "abs",
+        _RK4 + "the fit's ratio moves with the difference of the modes' phase drifts, measured <= 7.4e-4 eps4 omega_a "
+        "t_run (default cases): tolerance 0.01 eps4 omega_a t_run + 1e-11"
+        + pendulums.ROUNDOFF.format(factor="3", measured="as shape-anti-phase"),
+        EXACT_THEORY.format(ids="O3/O7", what="th2/th1 of the anti-phase mode, measured minus exact"),
+    ),
+    Check(
+        "transfer-time-exact",
+        "1",
+        6e-9,
+        "abs",
+        _RK4 + "T_x = pi / (omega_a - omega_s) magnifies the frequencies' errors by omega_a / (omega_a - omega_s): "
+        "tolerance 10 eps4 omega_a / (omega_a - omega_s) + 1e-11"
+        + pendulums.ROUNDOFF.format(factor="0.5 omega_a / (omega_a - omega_s) x", measured="as transfer-time"),
+        EXACT_THEORY.format(ids="O4", what="T_x measured / T_x of the exact motion, minus 1"),
+    ),
+    Check(
+        "beat-waveform-exact",
+        "1",
+        4e-8,
+        "abs",
+        _RK4
+        + "the phase error grows as eps4 omega_a t: tolerance 10 eps4 omega_a t_run + 1e-11"
+        + pendulums.ROUNDOFF.format(factor="0.5 omega_a t_run x", measured="as beat-waveform"),
+        EXACT_THEORY.format(ids="O4", what="max |th - th_exact| / A over the run"),
+    ),
+)
+CHECKS = CHECKS + EXACT_CHECKS
 _BEATS = (
     "omega-in-phase",
     "omega-anti-phase",
@@ -117,8 +197,10 @@ _BEATS = (
     "transfer-time",
     "beat-waveform",
     "energy-drift",
+    *(c.name for c in EXACT_CHECKS),
 )
-_STRONG = tuple(c for c in _BEATS if c != "transfer-time")  # too few carrier peaks per beat to locate T_x
+# too few carrier peaks per beat to locate T_x
+_STRONG = tuple(c for c in _BEATS if c not in ("transfer-time", "transfer-time-exact"))
 _MODES = ("in-phase", "anti-phase")
 
 
@@ -195,6 +277,25 @@ def _beats_regime(kappa: tuple[float, float]) -> dict[str, Range | Bound]:
     }
 
 
+def _in_mode(sign: int) -> Bound:
+    """The one amplitude2 that releases the pair in the in-phase (+1) or anti-phase (-1) mode's shape: sign x
+    amplitude1."""
+    text = ("amplitude1" if sign > 0 else "-amplitude1") + ", the " + ("in-phase" if sign > 0 else "anti-phase")
+    text += " mode's shape th2/th1 = " + ("+1" if sign > 0 else "-1") + " (O3)"
+
+    def exact(p: Mapping[str, Any]) -> Range:
+        value = sign * p["amplitude1"]
+        return Range(value, value)
+
+    return Bound(text, exact, ("amplitude1",))
+
+
+_IN_MODE_REGIME = (
+    "released in the mode's shape (amplitude2 = +-amplitude1): another amplitude2 mixes both modes, whose frequencies "
+    "and shapes the case's checks read one at a time, and the symmetric motion's exact period no longer applies"
+)
+
+
 class CoupledPendulums(Scenario):
     """Two identical pendulums and a spring at d below the pivots: normal modes, beats, energy transfer
     (docs/theory.md O3, O4, O7)."""
@@ -233,6 +334,8 @@ class CoupledPendulums(Scenario):
             "both released at the same angle: the in-phase mode alone, a lone pendulum at any amplitude",
             {"amplitude2": lambda p: p["amplitude1"]},
             ("omega-in-phase", "shape-in-phase", "energy-drift"),
+            ranges={"amplitude2": _in_mode(+1)},
+            regime=_IN_MODE_REGIME,
         ),
         Case(
             "anti-phase",
@@ -244,10 +347,12 @@ class CoupledPendulums(Scenario):
                     "[-a_c, a_c], 2 d sin(a_c) = 0.9 s",
                     lambda p: Range(-pendulums.spring_collapse_limit(p["d"]), pendulums.spring_collapse_limit(p["d"])),
                     ("d",),
-                )
+                ),
+                "amplitude2": _in_mode(-1),
             },
             regime="the attachment points, s = 0.5 m apart, swing towards each other by 2 d sin(a): they stay at least "
-            "s/10 apart (at 2 d sin(a) = s they meet and the spring's stretch is no longer 2 d sin th)",
+            "s/10 apart (at 2 d sin(a) = s they meet and the spring's stretch is no longer 2 d sin th); "
+            + _IN_MODE_REGIME,
         ),
         Case(
             "beats",
@@ -322,6 +427,9 @@ class CoupledPendulums(Scenario):
         ratios = modes.shape_ratios()[1]
         rho = pendulums.roundoff(model, float(np.abs(angles0).max()))
         gains = _roundoff_gains(omega_a, omega_a - omega_s, duration)
+        tolerance = _roundoff_tolerances(rho, gains)
+        if excited.all():  # both modes: the linear theory's cases, whose checks have exact companions
+            tolerance.update(_exact_tolerances(omega_a, omega_s, float(model.opt.timestep), duration, rho, gains))
         return {
             "_modes": modes,
             "_excited": excited,
@@ -330,8 +438,10 @@ class CoupledPendulums(Scenario):
             "_duration": duration,
             "_scale": float(np.abs(angles0).max()),
             "_energy_scale": float(pendulums.row_energy(model, angles0[None], np.zeros((1, 2)))[0]),
-            "_tolerance": _roundoff_tolerances(rho, gains),
-            "_roundoff_eps": pendulums.roundoff_per_eps(rho, gains),
+            "_tolerance": tolerance,
+            "_roundoff_eps": pendulums.roundoff_per_eps(
+                rho, {**gains, **{c.name: gains[c.name.removesuffix("-exact")] for c in EXACT_CHECKS}}
+            ),
             "_roundoff_eps_rule": pendulums.ROUNDOFF_EPS_RULE,
             "omega-in-phase": omega_s,
             "omega-anti-phase": omega_a,
@@ -340,6 +450,7 @@ class CoupledPendulums(Scenario):
             "transfer-time": beats.transfer_time,
             "beat-waveform": 0.0,
             "energy-drift": 0.0,
+            **{c.name: 0.0 for c in EXACT_CHECKS},
         }
 
     def check_model(self, model: mujoco.MjModel) -> None:
@@ -352,25 +463,78 @@ class CoupledPendulums(Scenario):
 
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
         t, theta = traj.time, traj.qpos
-        modes: osc.NormalModes = prediction["_modes"]
-        excited = prediction["_excited"]
-        q = modes.coordinates(theta)
-        omegas = np.array([pendulums.frequency(t, q[:, r]) if excited[r] else np.nan for r in range(2)])
-        fitted = [r for r in range(2) if excited[r]]
-        z = pendulums.modal_amplitudes(t, theta, omegas[fitted])
-        shapes = {r: pendulums.mode_shape(z[:, i])[1] for i, r in enumerate(fitted)}
-        linear = modes.angles(t, prediction["_angles0"])
-        return {
-            "omega-in-phase": omegas[0],
-            "omega-anti-phase": omegas[1],
-            "shape-in-phase": shapes.get(0, np.nan),
-            "shape-anti-phase": shapes.get(1, np.nan),
-            "transfer-time": transfer_time(t, theta[:, 1], traj.qvel[:, 1], before=2 * prediction["transfer-time"]),
+        sim = _observe(t, theta, traj.qvel, prediction)
+        linear = prediction["_modes"].angles(t, prediction["_angles0"])
+        out = {
+            **sim,
             "beat-waveform": float(np.abs(theta - linear).max() / prediction["_scale"]),
             "energy-drift": pendulums.energy_drift(
                 pendulums.row_energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]
             ),
         }
+        if prediction["_excited"].all():
+            out.update(_exact_companions(model, traj, prediction, sim))
+        return out
+
+
+def _observe(t: np.ndarray, theta: np.ndarray, rate: np.ndarray, prediction: Mapping[str, Any]) -> dict[str, float]:
+    """The measured frequencies, shapes and transfer time of a motion (angles and rates sampled at `t`)."""
+    modes: osc.NormalModes = prediction["_modes"]
+    excited = prediction["_excited"]
+    q = modes.coordinates(theta)
+    omegas = np.array([pendulums.frequency(t, q[:, r]) if excited[r] else np.nan for r in range(2)])
+    fitted = [r for r in range(2) if excited[r]]
+    z = pendulums.modal_amplitudes(t, theta, omegas[fitted])
+    shapes = {r: pendulums.mode_shape(z[:, i])[1] for i, r in enumerate(fitted)}
+    return {
+        "omega-in-phase": omegas[0],
+        "omega-anti-phase": omegas[1],
+        "shape-in-phase": shapes.get(0, np.nan),
+        "shape-anti-phase": shapes.get(1, np.nan),
+        "transfer-time": transfer_time(t, theta[:, 1], rate[:, 1], before=2 * prediction["transfer-time"]),
+    }
+
+
+def _exact_companions(
+    model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any], sim: Mapping[str, float]
+) -> dict[str, float]:
+    """The companions' values: each quantity of `sim` against the same measurement of the exact motion."""
+    ref = exact.motion(
+        traj.time,
+        exact.SpringRow(**pendulums.spring_row(model)).acceleration,
+        prediction["_modes"],
+        prediction["_angles0"],
+    )
+    if not ref.bound <= _REF:  # the reference did not converge (beyond the linear regime): the companions fail
+        return {c.name: np.nan for c in EXACT_CHECKS}
+    ex = _observe(traj.time, ref.angles, ref.rates, prediction)
+    out = {
+        "omega-in-phase-exact": sim["omega-in-phase"] / ex["omega-in-phase"] - 1,
+        "omega-anti-phase-exact": sim["omega-anti-phase"] / ex["omega-anti-phase"] - 1,
+        "shape-in-phase-exact": sim["shape-in-phase"] - ex["shape-in-phase"],
+        "shape-anti-phase-exact": sim["shape-anti-phase"] - ex["shape-anti-phase"],
+        "transfer-time-exact": sim["transfer-time"] / ex["transfer-time"] - 1,
+        "beat-waveform-exact": float(np.abs(traj.qpos - ref.angles).max() / prediction["_scale"]),
+    }
+    return {name: float(value) for name, value in out.items()}
+
+
+def _exact_tolerances(
+    omega_a: float, omega_s: float, timestep: float, duration: float, rho: float, gains: Mapping[str, float]
+) -> dict[str, float]:
+    """The companions' tolerances (`EXACT_CHECKS`' reasons): RK4's error at the run's step, the reference's budget, or
+    the double-precision floor of the check they accompany if larger."""
+    eps4 = pendulums.rk4_frequency_error(omega_a, timestep)
+    split = omega_a - omega_s
+    base = {
+        "omega-in-phase-exact": 10 * eps4,
+        "omega-anti-phase-exact": 10 * eps4,
+        "shape-in-phase-exact": 0.01 * eps4 * omega_a * duration,
+        "shape-anti-phase-exact": 0.01 * eps4 * omega_a * duration,
+        "transfer-time-exact": 10 * eps4 * omega_a / split if split > 0 else np.inf,
+        "beat-waveform-exact": 10 * eps4 * omega_a * duration,
+    }
+    return {name: max(value + _REF, gains[name.removesuffix("-exact")] * rho) for name, value in base.items()}
 
 
 @functools.cache
@@ -392,8 +556,9 @@ def _roundoff_gains(omega_a: float, split: float, duration: float) -> dict[str, 
 
 
 def _roundoff_tolerances(rho: float, gains: dict[str, float]) -> dict[str, float]:
-    """Each check's tolerance, or its double-precision floor ``gain x rho`` if larger."""
-    return {c.name: max(c.tolerance, gains[c.name] * rho) for c in CHECKS}
+    """Each linear check's tolerance, or its double-precision floor ``gain x rho`` if larger (the companions':
+    `_exact_tolerances`)."""
+    return {c.name: max(c.tolerance, gains[c.name] * rho) for c in CHECKS if c.name in gains}
 
 
 def transfer_time(t: np.ndarray, angle2: np.ndarray, rate2: np.ndarray, *, before: float = np.inf) -> float:

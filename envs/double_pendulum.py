@@ -23,6 +23,11 @@ Time scales: the timestep follows the fast mode (2 ms in the unequal case, 1.76 
 solves r + 2 + 1/r = (1 + m2/m1)(1 + l2/l1)^2 / (l2/l1) (O6's quartic), which bounds length2 to [length1 / 199, 199
 length1] and mass2 to [1e-3 mass1, (402 lambda / (1 + lambda)^2 - 1) mass1], lambda = length2 / length1 (ranges
 that depend on the others).
+
+Exact companions (issue 35): the linear checks' tolerances are sized by the neglected amplitude^2 terms, so each has a
+companion ``<check>-exact`` that applies the same measurement to the exact nonlinear motion of the same model (every
+number read back from the compiled model; `rigidbench.analytic.oscillations_exact`), sampled at the simulation's
+times, and reports the difference: RK4's error at the run's step is what is left (frequencies and shapes, every case).
 """
 
 from __future__ import annotations
@@ -35,6 +40,7 @@ import mujoco
 import numpy as np
 
 from rigidbench.analytic import oscillations as osc
+from rigidbench.analytic import oscillations_exact as exact
 from rigidbench.contract import Case, Check, Derived, Scenario, Trajectory
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, PendulumEnv, RodLength
@@ -71,7 +77,69 @@ CHECKS = (
         "O6: E = 1/2 sum m v^2 + I th'^2 + m g z conserved (relative to its initial value)",
     ),
 )
-_BOTH = ("omega-slow", "omega-fast", "shape-slow", "shape-fast", "energy-drift")
+# Exact companions (issue 35): each linear check measured the same way on the exact nonlinear motion of the same model
+# (`rigidbench.analytic.oscillations_exact`), sampled at the simulation's times.
+# The reference's error budget, relative to the amplitude: its a-posteriori bound (`ExactMotion.bound`) is <= 2 eps
+# w_max t_run (its phases' rounding) + ~1e-15 (iteration and quadrature), <= 1.7e-12 over the cases' ranges.
+_REF = 1e-11
+_EXACT_THEORY = (
+    "O6/O7 exact: the nonlinear equations of motion of the two links as compiled (Lagrange's equations of T = 1/2 "
+    "(m1 c1^2 + I1 + m2 e1^2) th1'^2 + 1/2 (m2 c2^2 + I2) th2'^2 + m2 e1 c2 cos(th1 - th2) th1' th2', V = -(m1 c1 + m2 "
+    "e1) g cos th1 - m2 g c2 cos th2), solved by Picard's iteration of Duhamel's formula to <= 1e-11 of the amplitude; "
+)
+_RK4 = (
+    "RK4 at the run's step: relative frequency error eps4 = (omega dt)^4 / 120 of each mode (9e-11 and 2.6e-12 at the "
+    "defaults); the same measurement applied to both, so only the integrator's error (and the reference's 1e-11) is "
+    "left; "
+)
+_SHAPE_EXACT = (
+    _RK4 + "the fit's ratio moves with the difference of the modes' phase drifts, measured <= {measured} eps4 "
+    "omega_fast t_run (1 + r^2) (default cases): tolerance {factor} eps4 omega_fast t_run (1 + r^2) + 1e-11"
+)
+SHAPE_FACTOR = 1e-3
+EXACT_CHECKS = (
+    Check(
+        "omega-slow-exact",
+        "1",
+        2.7e-11,
+        "abs",
+        _RK4 + "tolerance 10 eps4 + 1e-11",
+        _EXACT_THEORY + "omega_slow measured / omega_slow of the exact motion, minus 1",
+    ),
+    Check(
+        "omega-fast-exact",
+        "1",
+        9e-10,
+        "abs",
+        _RK4 + "tolerance 10 eps4 + 1e-11",
+        _EXACT_THEORY + "omega_fast measured / omega_fast of the exact motion, minus 1",
+    ),
+    Check(
+        "shape-slow-exact",
+        "1",
+        1e-9,
+        "abs",
+        _SHAPE_EXACT.format(measured="1.4e-5", factor=SHAPE_FACTOR),
+        _EXACT_THEORY + "th2/th1 of the slow mode, measured minus exact",
+    ),
+    Check(
+        "shape-fast-exact",
+        "1",
+        1e-9,
+        "abs",
+        _SHAPE_EXACT.format(measured="1.4e-5", factor=SHAPE_FACTOR),
+        _EXACT_THEORY + "th2/th1 of the fast mode, measured minus exact",
+    ),
+)
+CHECKS = CHECKS + EXACT_CHECKS
+_BOTH = (
+    "omega-slow",
+    "omega-fast",
+    "shape-slow",
+    "shape-fast",
+    "energy-drift",
+    *(c.name for c in EXACT_CHECKS),
+)
 # Float32 (Warp, MJX float32): with both modes excited (`released`, `unequal`) every check's round-off floor grows
 # like the step count, (eps / 2) N (`rigidbench.engines.roundoff_floor`, secular), not like sqrt(N). A fast mode rides
 # a slow one, so each step's rounding of MuJoCo's coordinates lands on nearly the same digits as the last one's and
@@ -205,7 +273,7 @@ class DoublePendulum(Scenario):
             "slow-mode",
             "released in the slow mode's shape (th2/th1 = +sqrt 2 for equal masses and lengths)",
             {"amplitude2": lambda p: _mode_ratio(p, 0) * p["amplitude1"]},
-            ("omega-slow", "shape-slow", "energy-drift"),
+            ("omega-slow", "shape-slow", "energy-drift", "omega-slow-exact", "shape-slow-exact"),
             ranges={"amplitude1": _amplitude_regime(0), "amplitude2": _in_mode(0)},
             regime=_REGIME
             + "; released in the mode's shape (amplitude2 = r amplitude1): another amplitude2 mixes both "
@@ -215,7 +283,7 @@ class DoublePendulum(Scenario):
             "fast-mode",
             "released in the fast mode's shape (th2/th1 = -sqrt 2 for equal masses and lengths)",
             {"amplitude2": lambda p: _mode_ratio(p, 1) * p["amplitude1"]},
-            ("omega-fast", "shape-fast", "energy-drift"),
+            ("omega-fast", "shape-fast", "energy-drift", "omega-fast-exact", "shape-fast-exact"),
             ranges={"amplitude1": _amplitude_regime(1), "amplitude2": _in_mode(1)},
             regime=_REGIME
             + "; released in the mode's shape (amplitude2 = r amplitude1): another amplitude2 mixes both "
@@ -266,22 +334,35 @@ class DoublePendulum(Scenario):
         angles0 = absolute(data.qpos[None])[0]
         excited = np.abs(modes.coordinates(angles0)) > 1e-6 * np.abs(modes.coordinates(angles0)).max()
         ratios = modes.shape_ratios()[1]
+        duration = 30.5 * 2 * np.pi / modes.frequencies[excited].min()
+        eps4 = [pendulums.rk4_frequency_error(float(w), float(model.opt.timestep)) for w in modes.frequencies]
+        drift = eps4[1] * float(modes.frequencies[1]) * duration
+        tolerance = {
+            name: self.check(name).tolerance * max(1.0, (1 + r**2) / (1 + SHAPE_RATIO_REF**2))
+            for name, r in (("shape-slow", ratios[0]), ("shape-fast", ratios[1]))
+        }
+        tolerance.update(
+            {
+                "omega-slow-exact": 10 * eps4[0] + _REF,
+                "omega-fast-exact": 10 * eps4[1] + _REF,
+                "shape-slow-exact": SHAPE_FACTOR * drift * (1 + ratios[0] ** 2) + _REF,
+                "shape-fast-exact": SHAPE_FACTOR * drift * (1 + ratios[1] ** 2) + _REF,
+            }
+        )
         return {
             "_modes": modes,
             "_excited": excited,
             "_angles0": angles0,
             "_scale": float(np.abs(angles0).max()),
             "_energy_scale": float(energy(model, data.qpos[None], data.qvel[None])[0]),
-            "_duration": 30.5 * 2 * np.pi / modes.frequencies[excited].min(),
+            "_duration": duration,
             "omega-slow": float(modes.frequencies[0]),
             "omega-fast": float(modes.frequencies[1]),
             "shape-slow": float(ratios[0]),
             "shape-fast": float(ratios[1]),
             "energy-drift": 0.0,
-            "_tolerance": {
-                name: self.check(name).tolerance * max(1.0, (1 + r**2) / (1 + SHAPE_RATIO_REF**2))
-                for name, r in (("shape-slow", ratios[0]), ("shape-fast", ratios[1]))
-            },
+            **{c.name: 0.0 for c in EXACT_CHECKS},
+            "_tolerance": tolerance,
             # A float32 engine's floor (`Scenario._roundoff_check`): secular with both modes excited (see `_BOTH`).
             "_roundoff_secular": _BOTH if excited.all() else (),
         }
@@ -291,21 +372,58 @@ class DoublePendulum(Scenario):
 
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
         t = traj.time
-        theta = absolute(traj.qpos)
-        modes: osc.NormalModes = prediction["_modes"]
-        excited = prediction["_excited"]
-        q = modes.coordinates(theta)
-        omegas = np.array([pendulums.frequency(t, q[:, r]) if excited[r] else np.nan for r in range(2)])
-        fitted = [r for r in range(2) if excited[r]]
-        z = pendulums.modal_amplitudes(t, theta, omegas[fitted])
-        shapes = {r: pendulums.mode_shape(z[:, i])[1] for i, r in enumerate(fitted)}
+        sim = _observe(t, absolute(traj.qpos), prediction)
+        ref = exact.motion(t, exact_model(model).acceleration, prediction["_modes"], prediction["_angles0"])
+        valid = ref.bound <= _REF  # else the reference did not converge (beyond the linear regime): the companions fail
+        ex = _observe(t, ref.angles, prediction) if valid else sim
         return {
-            "omega-slow": omegas[0],
-            "omega-fast": omegas[1],
-            "shape-slow": shapes.get(0, np.nan),
-            "shape-fast": shapes.get(1, np.nan),
+            **sim,
             "energy-drift": pendulums.energy_drift(energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]),
+            "omega-slow-exact": sim["omega-slow"] / ex["omega-slow"] - 1 if valid else np.nan,
+            "omega-fast-exact": sim["omega-fast"] / ex["omega-fast"] - 1 if valid else np.nan,
+            "shape-slow-exact": sim["shape-slow"] - ex["shape-slow"] if valid else np.nan,
+            "shape-fast-exact": sim["shape-fast"] - ex["shape-fast"] if valid else np.nan,
         }
+
+
+def _observe(t: np.ndarray, theta: np.ndarray, prediction: Mapping[str, Any]) -> dict[str, float]:
+    """The measured frequencies and shapes of a motion (absolute angles sampled at `t`)."""
+    modes: osc.NormalModes = prediction["_modes"]
+    excited = prediction["_excited"]
+    q = modes.coordinates(theta)
+    omegas = np.array([pendulums.frequency(t, q[:, r]) if excited[r] else np.nan for r in range(2)])
+    fitted = [r for r in range(2) if excited[r]]
+    z = pendulums.modal_amplitudes(t, theta, omegas[fitted])
+    shapes = {r: pendulums.mode_shape(z[:, i])[1] for i, r in enumerate(fitted)}
+    return {
+        "omega-slow": omegas[0],
+        "omega-fast": omegas[1],
+        "shape-slow": shapes.get(0, np.nan),
+        "shape-fast": shapes.get(1, np.nan),
+    }
+
+
+def exact_model(model: mujoco.MjModel) -> exact.DoublePendulumModel:
+    """The two links as the exact equations of motion take them, read back from the compiled model.
+
+    Raises
+    ------
+    ValueError
+        If the model has a force those equations leave out (joint damping, armature, friction loss) or hinge 2 is not
+        on link 1's axis.
+    """
+    present = [x for x in ("dof_damping", "dof_armature", "dof_frictionloss") if np.any(getattr(model, x) != 0)]
+    b2 = model.jnt_bodyid[1]
+    if present or np.any(model.body_pos[b2][:2] != 0) or np.any(model.jnt_pos != 0):
+        raise ValueError(f"the exact double pendulum has no {present} and its hinges on the links' axes")
+    p1, p2 = pendulums.pendulums(model)
+    return exact.DoublePendulumModel(
+        mass=(p1.mass, p2.mass),
+        com=(p1.length, p2.length),
+        inertia_cm=(p1.inertia_cm, p2.inertia_cm),
+        hinge2=float(-model.body_pos[b2][2]),
+        g=pendulums.gravity(model),
+    )
 
 
 @functools.cache

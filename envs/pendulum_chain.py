@@ -20,6 +20,12 @@ tolerances, and the attachment points of neighbours stay s/10 apart (`pendulums.
 Time scales: the timestep follows the highest mode (2 ms at the defaults), and a run lasts 30.5 periods of the
 lowest; kappa = k d^2 / (m g l) <= 24.75 (a range of k that depends on m, g, l and d: omega_highest / omega_lowest
 <= 10) keeps runs below 3e5 steps.
+
+Exact companions (issue 35): the linear checks' tolerances are sized by the neglected amplitude^2 terms, so each has a
+companion ``<check>-exact`` that applies the same measurement to the exact nonlinear motion of the same model (every
+number read back from the compiled model; `rigidbench.analytic.oscillations_exact`), sampled at the simulation's
+times, and reports the difference: RK4's error at the run's step is what is left (every mode's frequency, and the
+mode purity).
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ import mujoco
 import numpy as np
 
 from rigidbench.analytic import oscillations as osc
+from rigidbench.analytic import oscillations_exact as exact
 from rigidbench.contract import Case, Check, Derived, Domain, Params, Scenario, Trajectory
 from rigidbench.envs import pendulums
 from rigidbench.envs.pendulums import BobMass, ChainSize, PendulumEnv, RodLength, SpringHeight, SpringStiffness
@@ -102,6 +109,46 @@ CHECKS = (
         "O5: " + pendulums.SPRING_CHAIN_ENERGY,
     ),
 )
+# Exact companions (issue 35): the frequencies and the mode purity measured the same way on the exact nonlinear motion
+# of the same model (`rigidbench.analytic.oscillations_exact`), sampled at the simulation's times.
+# The reference's error budget, relative to the amplitude: its a-posteriori bound (`ExactMotion.bound`) is <= 2 eps
+# w_max t_run (its phases' rounding) + ~1e-15 (iteration and quadrature), <= 1.7e-12 over the cases' ranges.
+_REF = 1e-11
+_EXACT_THEORY = (
+    "{ids} exact: the nonlinear equations of motion of the chain as compiled (I_O th_i'' = -M g h sin th_i - sum k (L "
+    "- L0) dL/dth_i over its springs, L a spring's length between its attachment points), solved by Picard's "
+    "iteration of Duhamel's formula to <= 1e-11 of the amplitude; {what}"
+)
+_RK4 = (
+    "RK4 at the run's step: relative frequency error eps4 = (omega_highest dt)^4 / 120 (1.5e-11 at the defaults); "
+    "the same measurement applied to both, so only the integrator's error (and the reference's 1e-11) is left; "
+)
+EXACT_CHECKS = (
+    Check(
+        "mode-frequencies-exact",
+        "1",
+        1.6e-10,
+        "abs",
+        _RK4 + "tolerance 10 eps4 + 1e-11" + pendulums.ROUNDOFF.format(factor="0.5", measured="as mode-frequencies"),
+        _EXACT_THEORY.format(
+            ids="O5/O7",
+            what="the companion of omega-lowest, omega-highest, mode-frequencies and mode-frequencies-closed-form: "
+            "the largest |omega_r measured / omega_r of the exact motion - 1| over the N modes (signed)",
+        ),
+    ),
+    Check(
+        "mode-purity-exact",
+        "1",
+        1.1e-10,
+        "abs",
+        _RK4
+        + "the residual moves with the modes' phase drifts: measured <= 8.5e-4 eps4 omega_highest t_run / sin(pi / "
+        "2N) (the weakest mode's share of the release) in the default cases; tolerance 0.01 of that + 1e-11"
+        + pendulums.ROUNDOFF.format(factor="as mode-purity:", measured="as mode-purity"),
+        _EXACT_THEORY.format(ids="O5/O7", what="the mode-purity residual measured minus that of the exact motion"),
+    ),
+)
+CHECKS = CHECKS + EXACT_CHECKS
 _ALL = (
     "omega-lowest",
     "omega-highest",
@@ -109,6 +156,7 @@ _ALL = (
     "mode-frequencies-closed-form",
     "mode-purity",
     "energy-drift",
+    *(c.name for c in EXACT_CHECKS),
 )
 
 
@@ -262,6 +310,14 @@ class PendulumChain(Scenario):
         angles0 = data.qpos.copy()
         rho = pendulums.roundoff(model, float(np.abs(angles0).max()))
         gains = _roundoff_gains(omega_o7)
+        tolerance = _roundoff_tolerances(rho, gains)
+        eps4 = pendulums.rk4_frequency_error(float(omega_o7[-1]), float(model.opt.timestep))
+        run = RUN_PERIODS * 2 * np.pi / float(omega_o7[0])
+        tolerance["mode-frequencies-exact"] = max(10 * eps4 + _REF, gains["mode-frequencies"] * rho)
+        tolerance["mode-purity-exact"] = max(
+            PURITY_FACTOR * eps4 * float(omega_o7[-1]) * run / np.sin(np.pi / (2 * n)) + _REF,
+            gains["mode-purity"] * rho,
+        )
         return {
             "_modes": modes,
             "_omega_O7": omega_o7,
@@ -269,8 +325,10 @@ class PendulumChain(Scenario):
             "_angles0": angles0,
             "_scale": float(np.abs(angles0).max()),
             "_energy_scale": float(pendulums.row_energy(model, angles0[None], np.zeros((1, n)))[0]),
-            "_tolerance": _roundoff_tolerances(rho, gains),
-            "_roundoff_eps": pendulums.roundoff_per_eps(rho, gains),
+            "_tolerance": tolerance,
+            "_roundoff_eps": pendulums.roundoff_per_eps(
+                rho, {**gains, **{c.name: gains[c.name.removesuffix("-exact")] for c in EXACT_CHECKS}}
+            ),
             "_roundoff_eps_rule": pendulums.ROUNDOFF_EPS_RULE,
             "omega-lowest": float(closed[0]),
             "omega-highest": float(closed[-1]),
@@ -278,6 +336,7 @@ class PendulumChain(Scenario):
             "mode-frequencies-closed-form": 0.0,
             "mode-purity": 0.0,
             "energy-drift": 0.0,
+            **{c.name: 0.0 for c in EXACT_CHECKS},
         }
 
     def duration(self, prediction: Mapping[str, Any]) -> float:
@@ -285,10 +344,13 @@ class PendulumChain(Scenario):
 
     def measure(self, model: mujoco.MjModel, traj: Trajectory, prediction: Mapping[str, Any]) -> dict[str, float]:
         t, theta = traj.time, traj.qpos
-        modes: osc.NormalModes = prediction["_modes"]
-        q = modes.coordinates(theta)
-        omegas = np.array([pendulums.frequency(t, q[:, r]) for r in range(q.shape[1])])
-        purity = max(pendulums.sinusoid_residual(t, q[:, r], omegas[r]) for r in range(q.shape[1]))
+        omegas, purity = _observe(t, theta, prediction["_modes"])
+        ref = exact.motion(
+            t, exact.SpringRow(**pendulums.spring_row(model)).acceleration, prediction["_modes"], prediction["_angles0"]
+        )
+        valid = ref.bound <= _REF  # else the reference did not converge (beyond the linear regime): the companions fail
+        omegas_ref, purity_ref = _observe(t, ref.angles, prediction["_modes"]) if valid else (omegas, purity)
+        ratio = omegas / omegas_ref - 1
         return {
             "omega-lowest": omegas[0],
             "omega-highest": omegas[-1],
@@ -298,7 +360,17 @@ class PendulumChain(Scenario):
             "energy-drift": pendulums.energy_drift(
                 pendulums.row_energy(model, traj.qpos, traj.qvel), prediction["_energy_scale"]
             ),
+            "mode-frequencies-exact": float(ratio[np.argmax(np.abs(ratio))]) if valid else np.nan,
+            "mode-purity-exact": purity - purity_ref if valid else np.nan,
         }
+
+
+def _observe(t: np.ndarray, theta: np.ndarray, modes: osc.NormalModes) -> tuple[np.ndarray, float]:
+    """Each mode's measured frequency (modal filter, zero crossings) and the mode-purity residual of a motion."""
+    q = modes.coordinates(theta)
+    omegas = np.array([pendulums.frequency(t, q[:, r]) for r in range(q.shape[1])])
+    purity = max(pendulums.sinusoid_residual(t, q[:, r], omegas[r]) for r in range(q.shape[1]))
+    return omegas, purity
 
 
 @functools.cache
@@ -310,16 +382,19 @@ def _roundoff_gains(omega: np.ndarray) -> dict[str, float]:
     """Each check's double-precision floor over rho (`pendulums.ROUNDOFF_DOMAIN_TEXT`): 0.5, the mode purity's
     `purity_gain`, the energy drift's 50."""
     factor = {"mode-purity": purity_gain(omega), "energy-drift": 50.0}
-    return {c.name: factor.get(c.name, 0.5) for c in CHECKS}
+    return {c.name: factor.get(c.name, 0.5) for c in CHECKS if c not in EXACT_CHECKS}
 
 
 def _roundoff_tolerances(rho: float, gains: dict[str, float]) -> dict[str, float]:
-    """Each check's tolerance, or its double-precision floor ``gain x rho`` if larger."""
-    return {c.name: max(c.tolerance, gains[c.name] * rho) for c in CHECKS}
+    """Each linear check's tolerance, or its double-precision floor ``gain x rho`` if larger (the companions' are set in
+    `PendulumChain.predict`)."""
+    return {c.name: max(c.tolerance, gains[c.name] * rho) for c in CHECKS if c.name in gains}
 
 
 # Run length in periods of the lowest mode (`PendulumChain.duration`).
 RUN_PERIODS = 30.5
+# mode-purity-exact's tolerance over eps4 omega_highest t_run / sin(pi / 2N) (its reason).
+PURITY_FACTOR = 0.01
 
 
 def purity_gain(omega: np.ndarray) -> float:

@@ -322,6 +322,49 @@ def springs(model: mujoco.MjModel) -> Springs:
     )
 
 
+def spring_row(model: mujoco.MjModel) -> dict[str, Any]:
+    """The side-by-side pendulums and springs of `model` as the exact equations of motion take them: the keyword
+    arguments of `rigidbench.analytic.oscillations_exact.SpringRow` (not imported here: the simple pendulum's reading
+    stays short), every number read back from the compiled model.
+
+    Raises
+    ------
+    ValueError
+        If the model has a force the exact equations leave out: joint or tendon damping, armature, friction loss, or
+        a nonlinear spring (MuJoCo's polynomial stiffness).
+    """
+    extra = {
+        "joint damping": model.dof_damping,
+        "joint armature": model.dof_armature,
+        "joint friction loss": model.dof_frictionloss,
+        "tendon damping": model.tendon_damping,
+        "tendon armature": model.tendon_armature,
+        "tendon stiffness polynomial": model.tendon_stiffnesspoly,
+    }
+    present = [name for name, value in extra.items() if np.any(np.asarray(value) != 0)]
+    if present:
+        raise ValueError(f"the exact equations of motion have no {', '.join(present)}; the model has some")
+    pend = pendulums(model)
+    g = gravity(model)
+    sp = springs(model)
+    return {
+        "inertia_pivot": np.array([p.inertia_pivot for p in pend]),
+        "mgl": np.array([p.mass * g * p.length for p in pend]),
+        "pivot_x": np.array([p.pivot_x for p in pend]),
+        "height": sp.height,
+        "pairs": sp.pairs,
+        "stiffness": sp.stiffness,
+        "rest_length": sp.rest_length,
+    }
+
+
+def rk4_frequency_error(omega: float, timestep: float) -> float:
+    """RK4's relative frequency error (omega dt)^4 / 120 for a mode of `omega` (rad/s) at `timestep` (s): the phase
+    of RK4's amplification factor over a step, omega dt - (omega dt)^5 / 120 + ... (Hairer, Norsett & Wanner,
+    *Solving ODEs I*, section II.2, stability function of RK4)."""
+    return float((omega * timestep) ** 4 / 120)
+
+
 def row_energy(model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
     """Total energy (J) of side-by-side pendulums with springs, from the full nonlinear geometry.
 
