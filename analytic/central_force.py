@@ -83,7 +83,7 @@ class Apsides:
         return abs(self.r1 - self.r0) / (self.r1 + self.r0)
 
 
-def apsides(mu: float, law: Law, r0: float, l: float) -> Apsides:
+def apsides(mu: float, law: Law, r0: float, ell: float) -> Apsides:
     """Integrate Binet's equation from the apsis r0 (u' = 0) to the next apsis (module docstring).
 
     The exact apsidal angle of an orbit of any eccentricity (the closed forms are its limits), and the time
@@ -94,11 +94,11 @@ def apsides(mu: float, law: Law, r0: float, l: float) -> Apsides:
     ValueError
         If no next apsis comes within 100 turns (an unbound orbit or a circle).
     """
-    c = mu / (l * l)
+    c = mu / (ell * ell)
 
     def rhs(phi: float, y: np.ndarray) -> list[float]:
         u, du, _ = y
-        return [du, -u + c * sum(k * u ** (n - 2) for k, n in zip(law.k, law.n, strict=True)), mu / (l * u * u)]
+        return [du, -u + c * sum(k * u ** (n - 2) for k, n in zip(law.k, law.n, strict=True)), mu / (ell * u * u)]
 
     def apsis(phi: float, y: np.ndarray) -> float:
         return y[1]
@@ -134,7 +134,7 @@ def apsidal_angle_second_order(n: float, e: float) -> float:
     return apsidal_angle_first_order(n) * (1 + (n - 2) * (n + 1) * e * e / 24)
 
 
-def unstable_growth(mu: float, k: float, n: float, l: float) -> tuple[float, float]:
+def unstable_growth(mu: float, k: float, n: float, ell: float) -> tuple[float, float]:
     """The circular radius r* (m) of angular momentum l in F = -k / r^n, and, for n > 3, the rate (1/s) at which a
     small radial offset grows: mu d''r = (n - 3) k / r*^(n + 1) dr, so dr(t) = dr(0) cosh(lambda t) from rest.
 
@@ -145,11 +145,11 @@ def unstable_growth(mu: float, k: float, n: float, l: float) -> tuple[float, flo
     """
     if n <= 3 or k <= 0:
         raise ValueError(f"n = {n:g}, k = {k:g}: a growing offset needs an attraction (k > 0) with n > 3 (K5)")
-    r_star = (l * l / (mu * k)) ** (1 / (3 - n))
+    r_star = (ell * ell / (mu * k)) ** (1 / (3 - n))
     return r_star, math.sqrt((n - 3) * k / (mu * r_star ** (n + 1)))
 
 
-def perihelion_advance(mu: float, k: float, k4: float, l: float, e: float) -> tuple[float, float]:
+def perihelion_advance(mu: float, k: float, k4: float, ell: float, e: float) -> tuple[float, float]:
     """The pericentre's advance per orbit (rad) in F = -k / r^2 - k4 / r^4, first order, and the second-order term.
 
     Binet: u'' + u = A + B u^2, A = mu k / l^2 = 1 / p, B = mu k4 / l^2 (GR: A = GM / h^2, B = 3 GM / c^2). The
@@ -158,7 +158,7 @@ def perihelion_advance(mu: float, k: float, k4: float, l: float, e: float) -> tu
     2 pi / w - 2 pi = 2 pi (beta + 3 beta^2 / 2 + 5 beta^2 e^2 / 12) + O(eps^3), so the second-order term is
     2 pi eps^2 (5/2 + 5 e^2 / 12).
     """
-    eps = mu * mu * k * k4 / l**4
+    eps = mu * mu * k * k4 / ell**4
     return 2 * math.pi * eps, 2 * math.pi * eps * eps * (2.5 + 5 * e * e / 12)
 
 
