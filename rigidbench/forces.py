@@ -119,17 +119,7 @@ def inverse_square(model: mujoco.MjModel) -> InverseSquare | None:
     it = _custom(model, mujoco.mjtObj.mjOBJ_TEXT, INVERSE_SQUARE)
     if it < 0:
         return None
-    adr, size = model.text_adr[it], model.text_size[it]
-    names = bytes(model.text_data[adr : adr + size - 1]).decode().split()
-    if not names or len(names) % 2:
-        raise ValueError(f"custom text {INVERSE_SQUARE!r} must list pairs of body names, got {names}")
-    ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names])
-    for n, i in zip(names, ids, strict=True):
-        if i <= 0:
-            raise ValueError(f"custom text {INVERSE_SQUARE!r}: {n!r} is not a body of the model (or is the world)")
-    first, second = ids[0::2], ids[1::2]
-    if np.any(first == second):
-        raise ValueError(f"custom text {INVERSE_SQUARE!r}: a pair names one body twice")
+    first, second = _pairs(model, it, INVERSE_SQUARE)
     inum = _custom(model, mujoco.mjtObj.mjOBJ_NUMERIC, INVERSE_SQUARE)
     if inum < 0:
         raise ValueError(f"custom numeric {INVERSE_SQUARE!r} (the strengths, N m^2) is missing")
@@ -140,6 +130,22 @@ def inverse_square(model: mujoco.MjModel) -> InverseSquare | None:
     if not np.all(np.isfinite(k)) or np.any(k == 0):
         raise ValueError(f"custom numeric {INVERSE_SQUARE!r}: every strength must be finite and nonzero, got {k}")
     return InverseSquare(first, second, k, _free_dofs(model, first, second))
+
+
+def _pairs(model: mujoco.MjModel, text: int, law: str) -> tuple[np.ndarray, np.ndarray]:
+    """The body ids (first, second) of the pairs listed by custom text `text` of law `law`, validated."""
+    adr, size = model.text_adr[text], model.text_size[text]
+    names = bytes(model.text_data[adr : adr + size - 1]).decode().split()
+    if not names or len(names) % 2:
+        raise ValueError(f"custom text {law!r} must list pairs of body names, got {names}")
+    ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names])
+    for n, i in zip(names, ids, strict=True):
+        if i <= 0:
+            raise ValueError(f"custom text {law!r}: {n!r} is not a body of the model (or is the world)")
+    first, second = ids[0::2], ids[1::2]
+    if np.any(first == second):
+        raise ValueError(f"custom text {law!r}: a pair names one body twice")
+    return first, second
 
 
 def _free_dofs(model: mujoco.MjModel, first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -220,17 +226,7 @@ def power_law(model: mujoco.MjModel) -> PowerLaw | None:
         return None
     if it < 0:
         raise ValueError(f"custom text {POWER_LAW!r} (pairs of body names, one per term) is missing")
-    adr, size = model.text_adr[it], model.text_size[it]
-    names = bytes(model.text_data[adr : adr + size - 1]).decode().split()
-    if not names or len(names) % 2:
-        raise ValueError(f"custom text {POWER_LAW!r} must list pairs of body names, got {names}")
-    ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names])
-    for n, i in zip(names, ids, strict=True):
-        if i <= 0:
-            raise ValueError(f"custom text {POWER_LAW!r}: {n!r} is not a body of the model (or is the world)")
-    first, second = ids[0::2], ids[1::2]
-    if np.any(first == second):
-        raise ValueError(f"custom text {POWER_LAW!r}: a pair names one body twice")
+    first, second = _pairs(model, it, POWER_LAW)
     values = []
     for name, i, unit in ((POWER_LAW, inum, "the strengths, N m^n"), (POWER_LAW_EXPONENT, iexp, "the exponents")):
         if i < 0:

@@ -168,3 +168,14 @@ def test_the_env_follows_the_reference_orbit():
             break
     env.close()
     assert worst < 1e-7
+
+
+def test_the_batched_engines_refuse_every_case():
+    """Warp and MJX have no passive-force callback: the power law is refused before simulating (engine matrix)."""
+    from rigidbench.engines.base import EngineRefused
+
+    for case in SCENARIO.cases:
+        model = SCENARIO.build(SCENARIO.resolve(case))
+        for engine in ("warp", "mjx"):
+            with pytest.raises(EngineRefused, match="power-law"):
+                forces.refuse_on(engine, model)
