@@ -32,7 +32,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.integrate import solve_ivp
 
 # The ODE reference's tolerances: DOP853 (8th order) at rtol 1e-13 keeps the apsidal angle and the orbit to ~1e-12,
 # four decades below the simulator errors the scenario's checks allow.
@@ -102,6 +101,8 @@ def apsides(mu: float, law: Law, r0: float, ell: float) -> Apsides:
 
     def apsis(phi: float, y: np.ndarray) -> float:
         return y[1]
+
+    from scipy.integrate import solve_ivp  # here, not at import: listing the scenarios must not load scipy
 
     apsis.terminal = True
     u0 = 1.0 / r0
@@ -173,6 +174,8 @@ def runge_lenz(mu: float, k: float, r: ArrayLike, v: ArrayLike) -> np.ndarray:
 def trajectory(mu: float, law: Law, r0: ArrayLike, v0: ArrayLike, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Position and velocity (m, m/s), shape (len(t), 3), of the orbit from r0, v0 at t = 0: the equations of
     motion integrated at rtol 1e-13 (DOP853), the reference trajectory where no closed form exists (n != 2, -1)."""
+    from scipy.integrate import solve_ivp  # here, not at import (`apsides`)
+
     t = np.asarray(t, dtype=float)
     r0, v0 = np.asarray(r0, dtype=float), np.asarray(v0, dtype=float)
     scale = float(np.linalg.norm(r0))
