@@ -156,7 +156,7 @@ class LawEntry:
         numeric.data = data
 
     def read(self, model: mujoco.MjModel) -> Value:
-        return self.sign * float(model.numeric(self.name).data[self.index])
+        return self.sign * float(model.numeric(self.name).data[self.index]) + 0.0  # + 0.0: -0.0 reads as 0
 
 
 def _law(p: Mapping[str, Any]) -> cf.Law:
