@@ -354,7 +354,7 @@ class CentralForce(Scenario):
             "inverse square plus a small -k4 / r^4 (eps = 1e-3), e = 0.44: the pericentre advances 2 pi eps per orbit",
             {"exponent": 2.0, "strength": 1.0, "correction": _correction, "speed_ratio": 1.2},
             ("apsidal-angle", "perihelion-advance", "orbit", "energy-drift", "momentum-drift"),
-            ranges={"exponent": Range(2.0, 2.0), "speed_ratio": Range(1.05, 1.34), "correction": Range(1e-6, 1e3)},
+            ranges={"exponent": Range(2.0, 2.0), "speed_ratio": Range(1.05, 1.34), "correction": Range(1e-8, 1e3)},
             regime=f"the inverse square with a small r^-4 attraction, eps <= {MAX_EPSILON:g} (domain 'first-order'), "
             "e <= 0.8",
         ),
