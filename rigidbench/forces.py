@@ -35,7 +35,10 @@ A model declares its forces in MJCF custom elements, so the model file carries i
 The batched engines (MuJoCo Warp, MJX) have no passive-force callback and refuse such a model before simulating
 (`refuse_on`).
 
-The second law, ``rigidbench:frame-field`` (`FrameField`), is a uniform field fixed in a body's axes: gravity
+``rigidbench:power-law`` (`PowerLaw`) generalises it to central terms ``|F| = |k| / r^n`` of any exponent, several
+per pair (docs/theory.md K5, K6; the central-force scenario).
+
+The third law, ``rigidbench:frame-field`` (`FrameField`), is a uniform field fixed in a body's axes: gravity
 that turns with a rotating platform (the Foucault pendulum, the eastward deflection), where MuJoCo's gravity is
 fixed in the world.
 """
@@ -45,6 +48,7 @@ from __future__ import annotations
 import ctypes
 import functools
 import glob
+import math
 import os
 import threading
 import weakref
@@ -116,17 +120,7 @@ def inverse_square(model: mujoco.MjModel) -> InverseSquare | None:
     it = _custom(model, mujoco.mjtObj.mjOBJ_TEXT, INVERSE_SQUARE)
     if it < 0:
         return None
-    adr, size = model.text_adr[it], model.text_size[it]
-    names = bytes(model.text_data[adr : adr + size - 1]).decode().split()
-    if not names or len(names) % 2:
-        raise ValueError(f"custom text {INVERSE_SQUARE!r} must list pairs of body names, got {names}")
-    ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names])
-    for n, i in zip(names, ids, strict=True):
-        if i <= 0:
-            raise ValueError(f"custom text {INVERSE_SQUARE!r}: {n!r} is not a body of the model (or is the world)")
-    first, second = ids[0::2], ids[1::2]
-    if np.any(first == second):
-        raise ValueError(f"custom text {INVERSE_SQUARE!r}: a pair names one body twice")
+    first, second = _pairs(model, it, INVERSE_SQUARE)
     inum = _custom(model, mujoco.mjtObj.mjOBJ_NUMERIC, INVERSE_SQUARE)
     if inum < 0:
         raise ValueError(f"custom numeric {INVERSE_SQUARE!r} (the strengths, N m^2) is missing")
@@ -137,6 +131,22 @@ def inverse_square(model: mujoco.MjModel) -> InverseSquare | None:
     if not np.all(np.isfinite(k)) or np.any(k == 0):
         raise ValueError(f"custom numeric {INVERSE_SQUARE!r}: every strength must be finite and nonzero, got {k}")
     return InverseSquare(first, second, k, _free_dofs(model, first, second))
+
+
+def _pairs(model: mujoco.MjModel, text: int, law: str) -> tuple[np.ndarray, np.ndarray]:
+    """The body ids (first, second) of the pairs listed by custom text `text` of law `law`, validated."""
+    adr, size = model.text_adr[text], model.text_size[text]
+    names = bytes(model.text_data[adr : adr + size - 1]).decode().split()
+    if not names or len(names) % 2:
+        raise ValueError(f"custom text {law!r} must list pairs of body names, got {names}")
+    ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names])
+    for n, i in zip(names, ids, strict=True):
+        if i <= 0:
+            raise ValueError(f"custom text {law!r}: {n!r} is not a body of the model (or is the world)")
+    first, second = ids[0::2], ids[1::2]
+    if np.any(first == second):
+        raise ValueError(f"custom text {law!r}: a pair names one body twice")
+    return first, second
 
 
 def _free_dofs(model: mujoco.MjModel, first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -151,6 +161,101 @@ def _free_dofs(model: mujoco.MjModel, first: np.ndarray, second: np.ndarray) -> 
     if any(d is None for ds in dofs for d in ds):
         return None
     return tuple((np.array(ds)[:, None] + np.arange(3)).ravel() for ds in dofs)
+
+
+POWER_LAW = "rigidbench:power-law"
+POWER_LAW_EXPONENT = "rigidbench:power-law-exponent"
+
+
+@dataclass(frozen=True)
+class PowerLaw:
+    """Central power-law terms between pairs of bodies: the second body of term i feels ``F = k_i r / |r|^(n_i + 1)``
+    (magnitude ``|k_i| / |r|^n_i``; ``k_i < 0`` attracts), r from the first body's centre of mass to the second's;
+    the first feels -F. A pair may carry several terms (an inverse square and an ``r^-4`` correction, docs/theory.md
+    K6); a term of strength 0 exerts nothing.
+
+    Declared as ``<text name="rigidbench:power-law" data="a b [a b ...]"/>`` (one pair of body names per term),
+    ``<numeric name="rigidbench:power-law" data="k ..."/>`` (N m^n) and ``<numeric
+    name="rigidbench:power-law-exponent" data="n ..."/>``. n = 2 is the inverse square's law (``rigidbench:
+    inverse-square`` is kept for it, unchanged); the potential of a term is ``k r^(1 - n) / (n - 1)``, or ``-k ln r``
+    at n = 1. Applied with `mujoco.mj_applyFT` at each body's centre of mass, so a body fixed to the world may be
+    the centre.
+    """
+
+    first: np.ndarray
+    second: np.ndarray
+    k: np.ndarray
+    n: np.ndarray
+
+    def forces(self, xipos: np.ndarray) -> np.ndarray:
+        """The force on each term's second body (N, world frame), shape (nterm, 3); the first feels minus it."""
+        r = xipos[self.second] - xipos[self.first]
+        dist = np.sqrt(np.einsum("ij,ij->i", r, r))
+        safe = np.where(dist > 0, dist, 1.0)  # coincident bodies have no direction: no force (`InverseSquare`)
+        scale = np.where(dist > 0, self.k / safe ** (self.n + 1), 0.0)
+        return scale[:, None] * r
+
+    def potential_energy(self, xipos: np.ndarray) -> float:
+        """sum over the terms of k r^(1 - n) / (n - 1) (-k ln r at n = 1) (J)."""
+        r = xipos[self.second] - xipos[self.first]
+        dist = np.sqrt(np.einsum("ij,ij->i", r, r))
+        one = self.n == 1
+        u = np.where(one, -self.k * np.log(dist), self.k * dist ** (1 - self.n) / np.where(one, 1.0, self.n - 1))
+        return float(np.sum(u))
+
+    def __post_init__(self) -> None:
+        # The terms grouped by pair, as Python numbers: `apply` runs at every RK4 stage, where numpy's per-call cost
+        # on arrays of two terms dominated (~120 us a call, measured); one force per pair, one mj_applyFT per body.
+        pairs: dict[tuple[int, int], list[tuple[float, float]]] = {}
+        for a, b, k, n in zip(self.first, self.second, self.k, self.n, strict=True):
+            if k != 0:
+                pairs.setdefault((int(a), int(b)), []).append((float(k), -float(n) - 1))
+        object.__setattr__(self, "_pairs", tuple((a, b, tuple(terms)) for (a, b), terms in pairs.items()))
+
+    def apply(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Add the term forces, at each body's centre of mass, to ``data.qfrc_passive`` (a body welded to the world,
+        such as a fixed centre, takes none: it has no dofs)."""
+        zero = np.zeros(3)
+        xipos = data.xipos
+        for a, b, terms in self._pairs:
+            r = xipos[b] - xipos[a]
+            dist = math.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+            if dist == 0:
+                continue  # coincident bodies: no direction, no force (`forces`)
+            fb = sum(k * dist**p for k, p in terms) * r
+            if model.body_weldid[b]:
+                mujoco.mj_applyFT(model, data, fb, zero, xipos[b], b, data.qfrc_passive)
+            if model.body_weldid[a]:
+                mujoco.mj_applyFT(model, data, -fb, zero, xipos[a], a, data.qfrc_passive)
+
+
+def power_law(model: mujoco.MjModel) -> PowerLaw | None:
+    """The model's power-law terms, or None if it declares none.
+
+    Raises
+    ------
+    ValueError
+        If the declaration is malformed: an odd number of names, an unknown or world body, a pair of one body, a
+        missing numeric, strength or exponent counts that differ from the term count, or a non-finite number.
+    """
+    it = _custom(model, mujoco.mjtObj.mjOBJ_TEXT, POWER_LAW)
+    inum = _custom(model, mujoco.mjtObj.mjOBJ_NUMERIC, POWER_LAW)
+    iexp = _custom(model, mujoco.mjtObj.mjOBJ_NUMERIC, POWER_LAW_EXPONENT)
+    if it < 0 and inum < 0 and iexp < 0:
+        return None
+    if it < 0:
+        raise ValueError(f"custom text {POWER_LAW!r} (pairs of body names, one per term) is missing")
+    first, second = _pairs(model, it, POWER_LAW)
+    values = []
+    for name, i, unit in ((POWER_LAW, inum, "the strengths, N m^n"), (POWER_LAW_EXPONENT, iexp, "the exponents")):
+        if i < 0:
+            raise ValueError(f"custom numeric {name!r} ({unit}) is missing")
+        adr, size = model.numeric_adr[i], model.numeric_size[i]
+        v = np.array(model.numeric_data[adr : adr + size], dtype=float)
+        if len(v) != len(first) or not np.all(np.isfinite(v)):
+            raise ValueError(f"custom numeric {name!r} must hold {len(first)} finite numbers ({unit}), got {v}")
+        values.append(v)
+    return PowerLaw(first, second, *values)
 
 
 FRAME_FIELD = "rigidbench:frame-field"
@@ -228,6 +333,7 @@ def frame_field(model: mujoco.MjModel) -> FrameField | None:
 # The force laws: each parses a model (None: the model declares none) into something with `apply(model, data)`.
 LAWS: dict[str, Callable[[mujoco.MjModel], object | None]] = {
     INVERSE_SQUARE: inverse_square,
+    POWER_LAW: power_law,
     FRAME_FIELD: frame_field,
 }
 
@@ -316,7 +422,7 @@ def attach(model: mujoco.MjModel) -> bool:
     Raises
     ------
     ValueError
-        A malformed declaration (see `inverse_square`, `frame_field`).
+        A malformed declaration (see `inverse_square`, `power_law`, `frame_field`).
     RuntimeError
         If another passive-force callback is installed in this process (it is never overwritten).
     """
