@@ -20,6 +20,8 @@ power):
 - ``joint-damping``: every joint and tendon damping, where there is one;
 - ``inverse-square-k``: every strength of the model's declared inverse-square pairs (`rigidbench.forces`), where it
   declares one; named ``coulomb-k`` where every strength is positive (repulsion: Coulomb's q1 q2 / (4 pi eps0));
+- ``power-law-k``, ``power-law-n``: the strengths and the exponents of the model's declared power-law terms
+  (`rigidbench.forces.power_law`), where it declares them;
 - ``friction``: sliding friction of every geom and pair, where contacts are enabled;
 - ``contact-stiffness``: every contact's stiffness (direct solref: k; standard solref: the time constant over
   sqrt(1 + delta)), where contacts are enabled;
@@ -206,6 +208,13 @@ def quantities(model: mujoco.MjModel) -> list[Quantity]:
                 m.numeric_data[adr : adr + size] *= 1 + delta
 
         out.append(Quantity("coulomb-k" if np.all(law.k > 0) else "inverse-square-k", inverse_square))
+    if forces.power_law(model) is not None:  # every strength of the declared power-law terms, then their exponents
+        for label, numeric in (("power-law-k", forces.POWER_LAW), ("power-law-n", forces.POWER_LAW_EXPONENT)):
+
+            def scale(m: mujoco.MjModel, delta: float, numeric: str = numeric) -> None:
+                _scale_numeric(m, numeric, delta)  # a case's model without the force is left as it is
+
+            out.append(Quantity(label, scale))
     contact = not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
     collidable = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
     if contact and (collidable.any() or model.npair):

@@ -140,3 +140,18 @@ def test_a_pendulum_has_a_length_row_and_its_perturbation_moves_the_period():
         n.startswith("length:")
         for n in [q.name for q in power.quantities(registry.get("free-symmetric-top").prepare().model)]
     )
+
+
+def test_a_power_law_force_has_strength_and_exponent_rows_that_move_the_orbit():
+    """central-force declares its law through `rigidbench.forces` (k / r^n terms): power scales the strengths and the
+    exponents; the scaled model's force is what is simulated."""
+    scenario = registry.get("central-force")
+    model = scenario.prepare("kepler").model
+    names = [q.name for q in power.quantities(model)]
+    assert "power-law-k" in names and "power-law-n" in names
+    failed = {
+        o.check.name
+        for o in scenario.run("kepler", perturb=power.Perturbation("power-law-k", 1e-6)).outcomes
+        if not o.passed
+    }
+    assert failed
