@@ -123,15 +123,15 @@ CHECKS = (
     Check(
         "slip-deceleration",
         "m/s^2",
-        2.4e-7,
+        3.1e-7,
         "rel",
         "least-squares slope of the slip over the sliding phase (from the pulse's end to 0.8 t_r), with the hops' "
         "normal impulse put back (u + sgn(u0) (1 + 1/gamma) mu (v_z - v_z(0)), see initial-slip): Coulomb friction "
         "on the cone's surface is exact in MuJoCo's elliptic cone, so what remains is RK4's resolution of the "
         "touchdowns (a bias that falls as dt^1.7 and grows with the hop: measured -3.8e-8, -1.2e-7, -4.4e-7 at dt/2, "
         "dt, 2 dt for the centre shot; -7e-8 .. -1.3e-7 for V = |u0| / sqrt(g R) = 1 .. 3 over mu = 0.01 .. 2, "
-        "-2.3e-7 for the backspin's V = 8.5); tolerance 1.5e-7 + 3e-8 V per run (2.4e-7 at the centre shot's V = "
-        "3.78, listed)",
+        "-2.3e-7 for the backspin's V = 8.5; up to 1.2e-7 at V -> 0 for a heavy ball at mu ~ 1e-3 under Newton, "
+        "census seeds 1-2); tolerance 2e-7 + 3e-8 V per run (3.1e-7 at the centre shot's V = 3.78, listed)",
         "B2: du/dt = -(1 + 1/gamma) mu g sgn(u0) = -(7/2) mu g while sliding",
     ),
     Check(
@@ -263,7 +263,7 @@ def apply_billiard_setting(spec: mujoco.MjSpec, name: str, value: float) -> bool
 
 # The slip deceleration's bias from RK4's resolution of the hops' touchdowns, relative: a floor and its growth with
 # the slip number V = |u0| / sqrt(g R) (the slip-deceleration check's reason has the measurements).
-DECELERATION_BIAS = 1.5e-7
+DECELERATION_BIAS = 2e-7
 DECELERATION_BIAS_PER_V = 3e-8
 
 
