@@ -256,6 +256,43 @@ def soft_sphere_cm_angle(
     return theta.reshape(np.shape(impact_parameter))
 
 
+def soft_sphere_contact_time(
+    impact_parameter: ArrayLike, contact_distance: float, stiffness: float, speed: float
+) -> np.ndarray:
+    """Time (s) the soft spheres spend in contact, |r| < a, under V = 1/2 mu k (a - r)^2 (docs/theory.md C8).
+
+    The radial equation of the same scattering problem, ``r' = u sqrt(g(r))`` with ``g = 1 - b^2/r^2 - kappa (a -
+    r)^2``, ``kappa = k / u^2``, gives ``t_c = 2 integral_{r_min}^a dr / (u sqrt(g(r)))``; with ``g = (r - r_min)
+    h(r)`` and ``r = r_min + t^2`` (as in `soft_sphere_cm_angle`) it is the regular ``2 integral_0^sqrt(a - r_min) 2
+    dt / (u sqrt(h(r)))``, done by the same Gauss-Legendre rule. Head-on (b = 0) it is the half period pi / sqrt(k)
+    exactly; obliquely it is shorter (the centrifugal term b^2 / r^2 pushes the spheres apart sooner). 0 for a
+    miss (b >= a).
+
+    Raises
+    ------
+    ValueError
+        If the largest penetration u/sqrt(k) is not below a.
+    """
+    a = contact_distance
+    kappa = stiffness / speed**2
+    if not 1.0 / np.sqrt(kappa) < a:
+        raise ValueError(
+            f"largest penetration speed/sqrt(stiffness) = {1 / np.sqrt(kappa):g} m is not below the contact "
+            f"distance a = {a:g} m: the soft spheres pass through each other"
+        )
+    b = np.atleast_1d(np.asarray(impact_parameter, dtype=float))
+    hit = b < a
+    bh = np.where(hit, b, 0.0)
+    rmin = soft_sphere_turning_point(bh, a, stiffness, speed).reshape(bh.shape)
+    half = np.sqrt(a - rmin)
+    t = 0.5 * half[:, None] * (_GAUSS_T[None, :] + 1.0)
+    r = rmin[:, None] + t * t
+    bb = bh[:, None]
+    h = bb * bb * (r + rmin[:, None]) / (r * r * rmin[:, None] ** 2) + kappa * (2 * a - r - rmin[:, None])
+    duration = 2.0 * 0.5 * half * np.sum(_GAUSS_W * 2.0 / (speed * np.sqrt(h)), axis=1)
+    return np.where(hit, duration, 0.0).reshape(np.shape(impact_parameter))
+
+
 def soft_sphere_shift_first_order(
     impact_parameter: ArrayLike, contact_distance: float, stiffness: float, speed: float
 ) -> np.ndarray:

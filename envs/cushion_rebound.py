@@ -48,7 +48,7 @@ CHECKS = (
         "B1: u' = (1 + e) v (h M R / I - 1) = (1 + e) v (5 h / (2R) - 1), h = H - R; zero at H = 7/10 of the "
         "diameter ([H] 'bumper height')",
     ),
-    *(_CUE[name] for name in ("time-to-roll", "final-speed", "residual-slip", "lift-height")),
+    *(_CUE[name] for name in ("time-to-roll", "final-speed", "residual-slip", "lift-height", "slip-deceleration")),
 )
 _SKID = tuple(c.name for c in CHECKS)
 _NO_SKID = ("rebound-slip", "final-speed", "residual-slip", "lift-height")

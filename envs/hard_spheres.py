@@ -50,6 +50,20 @@ _RK4 = (
     "RK4 is second order: normal-velocity error <= (sqrt(k) dt)^2/24 = 1.0e-6 relative (RK4 as Simpson's rule on "
     "the kinked force), measured <= 9e-7 in angles, energies and restitution; 5e-6 leaves a factor 5"
 )
+# The contact time's RK4 error per kink, in units of z^3 = (sqrt(k) dt)^3 (relative), and its round-off factor.
+CONTACT_TIME_KINK = 1e-2
+_CONTACT_TIME = (
+    "the contact's entry and exit times, each extrapolated along the free flight from the last state before and the "
+    "first after (exact in free flight), read from the run; RK4 integrates the kinked force k max(delta, 0) across "
+    "each kink like Simpson's rule: per kink a position error <= k u_n dt^3 / 68 and a velocity error <= k u_n "
+    "dt^2 / 72 carried back over <= dt, i.e. a time error <= k dt^3 / 35 = z^3 / (35 pi) T, z = sqrt(k) dt; "
+    "tolerance 1e-2 z^3 per kink (2e-2 z^3, 2.5e-9 at the defaults' z = 5e-3; measured <= 2.4e-10, and <= 1.9e-3 "
+    "z^3 for z = 5e-3 .. 8e-2) + 10 eps a / delta_n (a position rounded to eps a read against the normal "
+    "penetration delta_n = u_n / sqrt(k)), set per run. MuJoCo's force law is this spring to round-off: with "
+    "solimp dmin = dmax = d, aref = -k/d delta and the solver's acceleration d aref (R = (1-d)/d A, A = 1/m1 + "
+    "1/m2 exact for a smooth sphere pair): measured relative normal acceleration / (k delta) - 1 <= 3.3e-16, "
+    "tangential / normal <= 1.3e-12, for m1/m2 = 1e-6 .. 3.4e3"
+)
 _ROUNDOFF = "equal and opposite contact forces at every RK4 stage: conserved to round-off (~1e-16 per step)"
 _SOFT_BOUND = (
     "k^-1/2 bound: 1.5 |d(angle)/d(theta)| pi (b/a) u / (a sqrt(k)) (+ its square for psi) + 5e-6 rad (RK4), "
@@ -121,6 +135,10 @@ def _contact_roundoff(
     # Every check but the momentum (exact pairwise forces: the random walk's floor) is read from the impulse.
     scales = {c.name: 1.0 for c in CHECKS if c.name not in ("momentum", "opening-angle", "soft-shift-exponent")}
     scales["opening-angle"] = 2.0
+    # The restitution is the impulse's (1 + e): a relative error q of the approach speed the spring sees (delta' = w
+    # + q u while the advance's rounding is steady) ends the contact at w = -(1 + 2q) u, so e is off by 2q, at any
+    # mass ratio (MJX float32, m1/m2 = 3.35e3: e = 1.01256 against q <= 9.0e-3; 1.63e-3 and 5.5e-3 at 2.4e3, 6.4e11).
+    scales["restitution"] = 2.0
     tolerance = prediction["_tolerance"]["soft-shift-exponent"]
     scales["soft-shift-exponent"] = (tolerance - 1e-3) / ANGLE_ERROR if tolerance > 1e-3 else 0.0
     return {
@@ -150,6 +168,14 @@ CHECKS = (
         _RK4,
         "C4: v1/u1 = (x cos psi +- sqrt(1 - x^2 sin^2 psi))/(1 + x), eq 9.53; + (stretch) for theta < arccos(-1/x), "
         "- (short) beyond (x > 1 only)",
+    ),
+    Check(
+        "contact-time",
+        "s",
+        2.5e-9,
+        "rel",
+        _CONTACT_TIME,
+        "C8: t_c = 2 int_{r_min}^a dr / (u sqrt(1 - b^2/r^2 - k (a - r)^2 / u^2)); pi / sqrt(k) head-on",
     ),
     Check("momentum", "1", 1e-12, "abs", _ROUNDOFF, "C1: total momentum conserved (|P - P0| / |P0|)", identity=True),
     Check("energy", "1", 5e-6, "abs", _RK4, "C1: elastic, T conserved (|T - T0| / T0)"),
@@ -208,6 +234,7 @@ _COMMON = (
     "momentum",
     "energy",
     "restitution",
+    "contact-time",
 )
 
 
@@ -463,6 +490,16 @@ class HardSpheres(Scenario):
             d_k, d_soft = abs(theta_hard - theta), abs(theta_hard - softer)
             exponent = float(np.log(d_soft / d_k) / np.log(SOFTER))
             exponent_tol = float((ANGLE_ERROR / d_k + ANGLE_ERROR / d_soft) / np.log(SOFTER) + 1e-3)
+        # The time in contact: the C8 quadrature of the radial motion (a damped contact is scored against the undamped
+        # spring's half period, and fails: a finding); RK4's error per kink and the penetration's rounding.
+        root_k = np.sqrt(spring.stiffness)
+        t_contact = (
+            float(scattering.soft_sphere_contact_time(b, a, spring.stiffness, speed)) if elastic else np.pi / root_k
+        )
+        normal_depth = speed * np.sqrt(max(1.0 - (b / a) ** 2, 0.0)) / root_k
+        contact_time_tol = 2 * CONTACT_TIME_KINK * (root_k * model.opt.timestep) ** 3 + (
+            10 * np.finfo(float).eps * a / normal_depth if normal_depth > 0 else np.inf
+        )
         out: dict[str, Any] = {
             "_elastic": elastic,
             "_duration": self._run_steps(model, self._contact_time(model)) * model.opt.timestep,
@@ -491,7 +528,9 @@ class HardSpheres(Scenario):
             "opening-angle": np.pi / 2 if m1 == m2 else psi + zeta,
             "soft-shift-exponent": exponent,
             "max-lab-angle": scattering.max_lab_angle(x),
+            "contact-time": t_contact,
             "_tolerance": {
+                "contact-time": float(contact_time_tol),
                 "soft-shift-exponent": exponent_tol,
                 "cm-angle-hard": bound + 5e-6,
                 # + bound^2: the second-order term, which dominates where psi is stationary (b0, x > 1).
@@ -610,6 +649,7 @@ class HardSpheres(Scenario):
             "soft-shift-exponent": float("nan"),
             "max-lab-angle": float("nan"),
         }
+        result["contact-time"] = contact_time(traj.time, self._state(model, traj.qpos, traj.qvel), a)
         theta_hard = prediction["cm-angle-hard"]
         if "softer" in traj.probes:
             state = traj.probes["softer"]
@@ -626,6 +666,26 @@ class HardSpheres(Scenario):
     @staticmethod
     def _split(model: mujoco.MjModel, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return state[..., 1 : 1 + model.nq], state[..., 1 + model.nq : 1 + model.nq + model.nv]
+
+
+def contact_time(time: np.ndarray, states: Mapping[str, np.ndarray], a: float) -> float:
+    """Time (s) the spheres spend within a of each other, from a run's rows (`HardSpheres._state` of every step):
+    the entry time extrapolated forward from the last row before the contact, the exit time backward from the
+    first row after it, both along the free flight (straight lines: exact there). NaN if the run has no complete
+    contact (no overlap, or the spheres still touch at its end)."""
+    r = states["x1"] - states["x2"]
+    v = states["v1"] - states["v2"]
+    inside = np.flatnonzero(np.linalg.norm(r, axis=-1) < a)
+    if inside.size == 0 or inside[0] == 0 or inside[-1] + 1 >= len(time):
+        return float("nan")
+
+    def crossing(i: int, sign: float) -> float:
+        # The s >= 0 at which |r_i + sign v_i s| = a: the nearer root of the quadratic.
+        vv, rv, rr = v[i] @ v[i], sign * (r[i] @ v[i]), r[i] @ r[i] - a * a
+        return float((-rv - np.sqrt(max(rv * rv - vv * rr, 0.0))) / vv)
+
+    first, last = int(inside[0]) - 1, int(inside[-1]) + 1
+    return float(time[last] - crossing(last, -1.0) - (time[first] + crossing(first, 1.0)))
 
 
 def _angle(v: np.ndarray, w: np.ndarray) -> np.ndarray:
