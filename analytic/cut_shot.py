@@ -17,7 +17,7 @@ The whole shot follows from the impulse J the object ball receives (J / M its ve
 
 For the hard-sphere impact J / M = V cos(phi) n, and the cue ball's deflection from its first line is
 ``tan delta = sin phi cos phi / (gamma + sin^2 phi) = 5 sin phi cos phi / (2 cos^2 phi + 7 sin^2 phi)``, largest at
-``tan phi = sqrt(gamma / (1 + gamma)) = sqrt(2/7)``: delta = 33.75 degrees at phi = 28.07 degrees (the "30 degree
+``tan phi = sqrt(gamma / (1 + gamma)) = sqrt(2/7)``: delta = 33.75 degrees at phi = 28.13 degrees (the "30 degree
 rule"); the final angle between the two balls is ``arctan((1 + 1/gamma) tan phi) = arctan(3.5 tan phi)``.
 Source: [D] (docs/theory.md B4).
 """
