@@ -439,7 +439,8 @@ def table(draws: Sequence[Draw]) -> str:
         out += [
             "",
             f"statistical tests: {failed} of {tests} failed on the first sample (a correct simulation fails "
-            f"{expected:.2g} on average); a draw failing only these is re-run on an independent sample:",
+            f"{expected:.2g} on average)"
+            + ("; a draw failing only these is re-run on an independent sample:" if failed else ""),
         ]
         out += [
             f"  {d.second['status']} on the second sample ({d.second['first_failed']} failed on the first): "
