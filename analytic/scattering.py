@@ -234,24 +234,10 @@ def soft_sphere_cm_angle(
     ValueError
         If the largest penetration u/sqrt(k) is not below a (the spheres would pass through each other).
     """
-    a = contact_distance
-    kappa = stiffness / speed**2
-    if not 1.0 / np.sqrt(kappa) < a:
-        raise ValueError(
-            f"largest penetration speed/sqrt(stiffness) = {1 / np.sqrt(kappa):g} m is not below the contact "
-            f"distance a = {a:g} m: the soft spheres pass through each other"
-        )
-    b = np.atleast_1d(np.asarray(impact_parameter, dtype=float))
-    hit = b < a
-    bh = np.where(hit, b, 0.0)
-    rmin = soft_sphere_turning_point(bh, a, stiffness, speed).reshape(bh.shape)
-    half = np.sqrt(a - rmin)  # t runs over [0, half]
-    t = 0.5 * half[:, None] * (_GAUSS_T[None, :] + 1.0)
-    r = rmin[:, None] + t * t
+    hit, bh, half, r, h = _contact_nodes(impact_parameter, contact_distance, stiffness, speed)
     bb = bh[:, None]
-    h = bb * bb * (r + rmin[:, None]) / (r * r * rmin[:, None] ** 2) + kappa * (2 * a - r - rmin[:, None])
     inner = 0.5 * half * np.sum(_GAUSS_W * 2 * bb / (r * r * np.sqrt(h)), axis=1)
-    theta = np.pi - 2.0 * (np.arcsin(bh / a) + inner)
+    theta = np.pi - 2.0 * (np.arcsin(bh / contact_distance) + inner)
     theta = np.where(hit, theta, 0.0)
     return theta.reshape(np.shape(impact_parameter))
 
@@ -273,22 +259,7 @@ def soft_sphere_contact_time(
     ValueError
         If the largest penetration u/sqrt(k) is not below a.
     """
-    a = contact_distance
-    kappa = stiffness / speed**2
-    if not 1.0 / np.sqrt(kappa) < a:
-        raise ValueError(
-            f"largest penetration speed/sqrt(stiffness) = {1 / np.sqrt(kappa):g} m is not below the contact "
-            f"distance a = {a:g} m: the soft spheres pass through each other"
-        )
-    b = np.atleast_1d(np.asarray(impact_parameter, dtype=float))
-    hit = b < a
-    bh = np.where(hit, b, 0.0)
-    rmin = soft_sphere_turning_point(bh, a, stiffness, speed).reshape(bh.shape)
-    half = np.sqrt(a - rmin)
-    t = 0.5 * half[:, None] * (_GAUSS_T[None, :] + 1.0)
-    r = rmin[:, None] + t * t
-    bb = bh[:, None]
-    h = bb * bb * (r + rmin[:, None]) / (r * r * rmin[:, None] ** 2) + kappa * (2 * a - r - rmin[:, None])
+    hit, _, half, _, h = _contact_nodes(impact_parameter, contact_distance, stiffness, speed)
     duration = 2.0 * 0.5 * half * np.sum(_GAUSS_W * 2.0 / (speed * np.sqrt(h)), axis=1)
     return np.where(hit, duration, 0.0).reshape(np.shape(impact_parameter))
 
@@ -358,3 +329,34 @@ def soft_sphere_relative_motion(
         return y[:3], y[3:]
 
     return motion
+
+
+def _contact_nodes(
+    impact_parameter: ArrayLike, contact_distance: float, stiffness: float, speed: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The Gauss-Legendre nodes of C8's contact integrals (`soft_sphere_cm_angle`, `soft_sphere_contact_time`):
+    which impacts hit (b < a), b where they do (0 elsewhere), the half-range sqrt(a - r_min) of t, the radii r =
+    r_min + t^2 at the nodes and the regular factor h(r) of g = (r - r_min) h(r).
+
+    Raises
+    ------
+    ValueError
+        If the largest penetration u/sqrt(k) is not below a.
+    """
+    a = contact_distance
+    kappa = stiffness / speed**2
+    if not 1.0 / np.sqrt(kappa) < a:
+        raise ValueError(
+            f"largest penetration speed/sqrt(stiffness) = {1 / np.sqrt(kappa):g} m is not below the contact "
+            f"distance a = {a:g} m: the soft spheres pass through each other"
+        )
+    b = np.atleast_1d(np.asarray(impact_parameter, dtype=float))
+    hit = b < a
+    bh = np.where(hit, b, 0.0)
+    rmin = soft_sphere_turning_point(bh, a, stiffness, speed).reshape(bh.shape)
+    half = np.sqrt(a - rmin)  # t runs over [0, half]
+    t = 0.5 * half[:, None] * (_GAUSS_T[None, :] + 1.0)
+    r = rmin[:, None] + t * t
+    bb = bh[:, None]
+    h = bb * bb * (r + rmin[:, None]) / (r * r * rmin[:, None] ** 2) + kappa * (2 * a - r - rmin[:, None])
+    return hit, bh, half, r, h

@@ -388,13 +388,7 @@ class DoublePendulum(Scenario):
 
 def _observe(t: np.ndarray, theta: np.ndarray, prediction: Mapping[str, Any]) -> dict[str, float]:
     """The measured frequencies and shapes of a motion (absolute angles sampled at `t`)."""
-    modes: osc.NormalModes = prediction["_modes"]
-    excited = prediction["_excited"]
-    q = modes.coordinates(theta)
-    omegas = np.array([pendulums.frequency(t, q[:, r]) if excited[r] else np.nan for r in range(2)])
-    fitted = [r for r in range(2) if excited[r]]
-    z = pendulums.modal_amplitudes(t, theta, omegas[fitted])
-    shapes = {r: pendulums.mode_shape(z[:, i])[1] for i, r in enumerate(fitted)}
+    omegas, shapes = pendulums.two_modes(t, theta, prediction["_modes"], prediction["_excited"])
     return {
         "omega-slow": omegas[0],
         "omega-fast": omegas[1],

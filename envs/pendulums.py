@@ -532,3 +532,15 @@ class PendulumEnv(ScenarioEnv):
                 if d != d:
                     break
         return worst / self._scale
+
+
+def two_modes(t: np.ndarray, theta: np.ndarray, modes: Any, excited: Any) -> tuple[np.ndarray, dict[int, float]]:
+    """The measured frequencies (rad/s; NaN for a mode not excited) and shapes (second pendulum over the first, by
+    mode index) of a two-pendulum motion: each excited mode's frequency from its normal coordinate
+    (`modes.coordinates`, `frequency`), then the shapes from one least-squares fit of both angles at those
+    frequencies (`modal_amplitudes`, `mode_shape`)."""
+    q = modes.coordinates(theta)
+    omegas = np.array([frequency(t, q[:, r]) if excited[r] else np.nan for r in range(2)])
+    fitted = [r for r in range(2) if excited[r]]
+    z = modal_amplitudes(t, theta, omegas[fitted])
+    return omegas, {r: mode_shape(z[:, i])[1] for i, r in enumerate(fitted)}
