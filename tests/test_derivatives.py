@@ -182,3 +182,27 @@ def test_a_census_of_the_derivative_checks_is_clean_and_reproducible(tmp_path, c
     assert all(t["failed"] == 0 and t["crashed"] == 0 and t["passed"] >= 2 for t in counts.values())
     again = derivatives.census(["pendulum"], n=3, seed=1, settings=None)
     assert [d.params for d in again] == [d["params"] for d in doc["draws"] if d["scenario"] == "pendulum"]
+
+
+def test_an_interrupted_derivatives_run_writes_what_finished_and_says_it_is_incomplete(tmp_path, monkeypatch):
+    """Ctrl-C between cases: exit 128 + SIGINT, the JSON keeps the finished rows and names the cases not run."""
+    import json
+    import signal
+
+    from rigidbench.interrupt import Interrupted
+
+    real, calls = derivatives.run_case, []
+
+    def second_is_interrupted(*args, **kwargs):
+        calls.append(args[1])
+        if len(calls) == 2:
+            raise Interrupted(signal.SIGINT)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(derivatives, "run_case", second_is_interrupted)
+    path = tmp_path / "d.json"
+    assert cli.main(["derivatives", "--quiet", "pendulum", "--json", str(path)]) == 128 + signal.SIGINT
+    doc = json.loads(path.read_text())
+    assert doc["complete"] is False and doc["interrupted_by"] == "SIGINT"
+    assert {r["case"] for r in doc["results"]} == {calls[0]}
+    assert f"pendulum:{calls[1]}" in doc["not_run"]

@@ -54,13 +54,14 @@ def main(args: argparse.Namespace) -> int:
     ran = shared.journaled_run(args, arguments, "census", session.CENSUS_INVOCATION, plan)
     result = ran.result
     census.settle(drawn, result)
-    second = census.second_samples(drawn, shared.settings(args)) if result.interrupted is None else {}
+    settings = shared.settings(args)
+    second = census.second_samples(drawn, settings) if result.interrupted is None else {}
     if second:  # a draw that failed only statistical tests, on an independent sample (`rigidbench.census`)
         from rigidbench.runner import run_jobs
 
         if not args.quiet:
             print(f"re-running {len(second)} draw(s) on an independent sample ...", file=sys.stderr, flush=True)
-        again = run_jobs(list(second.values()), shared.settings(args), workers=shared.workers(args.jobs))
+        again = run_jobs(list(second.values()), settings, workers=shared.workers(args.jobs))
         census.settle_second(drawn, second, again)
         result.interrupted = again.interrupted
     out = shared.human(args.json)

@@ -55,15 +55,27 @@ def main(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     if args.census:
         return _census(args, settings, t0)
+    from rigidbench.interrupt import Interrupted, check
+
     rows: list[dict] = []
-    for scenario, case in pairs:
+    stopped: Interrupted | None = None
+    for i, (scenario, case) in enumerate(pairs):
         if not args.quiet:
             print(f"{scenario.slug}:{case} ...", file=sys.stderr, flush=True)
         try:
             run = derivatives.run_case(scenario, case, sets or None, settings)
+            check()  # a signal whose exception was swallowed stops the run here
         except ValueError as exc:  # invalid parameters or settings, a set outside the theory's domain
             raise UsageError(str(exc)) from None
+        except Interrupted as exc:  # the files written say which cases did not run (as `run` does)
+            stopped = exc
+            not_run = tuple(f"{sc.slug}:{c}" for sc, c in pairs[i:])
+            break
         rows += results.rows_of(run)
+    if stopped is not None:
+        write(args, rows, results.Completion(len(pairs), not_run, stopped.name))
+        print(f"rigidbench: derivatives interrupted by {stopped.name}", file=sys.stderr)
+        return stopped.status
     out = shared.human(args.json, args.junit)
     shown = [r for r in rows if r["status"] != results.PASS] if args.brief else rows
     if shown or not args.brief:
